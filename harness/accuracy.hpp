@@ -1,0 +1,31 @@
+#pragma once
+/// Answers of one replay pass, the oracle file, and the accuracy block that compares them.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "geometry.hpp"
+#include "method.hpp"
+
+namespace bvhbench {
+
+/// What a method answered, query by query, in query order (ARCHITECTURE.md, "Answers").
+struct Answers {
+  QueryType type = QueryType::inside;
+  std::vector<std::uint8_t> inside;      ///< N, inside jobs
+  std::vector<double> distance;          ///< N, signed, distance jobs
+  std::vector<Vec3d> closest, normal;    ///< N x 3
+  std::vector<std::int64_t> triangle;    ///< N, -1 where unknown
+  void resize(QueryType t, std::size_t n);
+  void write_npz(const std::string& path) const;
+};
+
+/// The `accuracy` block from a method's answers and an oracle file (`bvhbench truth`).
+/// `diagonal` is the mesh's bounding-box diagonal (near-surface threshold and relative errors).
+/// Throws InputError if the oracle file is malformed or does not match the query set.
+nlohmann::json compute_accuracy(const Answers& answers, const std::string& truth_path,
+                                double diagonal);
+
+}  // namespace bvhbench

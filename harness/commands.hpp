@@ -1,0 +1,22 @@
+#pragma once
+/// The `bvhbench` subcommands. Each add_*_command() adds one subcommand with its options and
+/// callback to the CLI app; main.cpp calls them all, then the commands methods register.
+/// Callbacks report failure by throwing: InputError (exit 2) or ExitCode (any code).
+
+namespace CLI { class App; }
+
+namespace bvhbench {
+
+/// Thrown by a command to end the program with this exit code (after writing its outputs).
+struct ExitCode {
+  int code;
+};
+
+void add_methods_command(CLI::App& app);  // cli_common.cpp
+void add_queries_command(CLI::App& app);  // query_set.cpp
+void add_run_command(CLI::App& app);      // run_job.cpp
+void add_suite_command(CLI::App& app);    // suite.cpp
+void add_truth_command(CLI::App& app);    // truth.cpp
+void add_compare_command(CLI::App& app);  // compare.cpp
+
+}  // namespace bvhbench

@@ -1,0 +1,209 @@
+#include "query_set.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+
+#include "commands.hpp"
+#include "errors.hpp"
+#include "mesh.hpp"
+#include "npy.hpp"
+#include "sha256.hpp"
+
+namespace bvhbench {
+
+Box3d QuerySet::bounds() const {
+  Box3d b;
+  for (auto& p : points) b.add(p);
+  return b;
+}
+
+std::string sidecar_path(const std::string& npy_path) {
+  std::string s = npy_path;
+  if (s.size() >= 4 && s.compare(s.size() - 4, 4, ".npy") == 0) s.resize(s.size() - 4);
+  return s + ".json";
+}
+
+QuerySet load_query_set(const std::string& npy_path) {
+  QuerySet q;
+  q.path = npy_path;
+  q.points = read_points_npy(npy_path);
+  q.sha256 = sha256_file(npy_path);
+  std::string side = sidecar_path(npy_path);
+  std::ifstream f(side);
+  if (!f) throw file_error(side, "missing sidecar JSON for query set " + npy_path);
+  try {
+    q.meta = nlohmann::json::parse(f);
+  } catch (const std::exception& e) {
+    throw file_error(side, std::string("malformed JSON: ") + e.what());
+  }
+  if (!q.meta.is_object()) throw file_error(side, "sidecar is not a JSON object");
+  for (const char* key : {"kind", "n", "seed"})
+    if (!q.meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
+  if (!q.meta["n"].is_number_integer() || q.meta["n"].get<long long>() != (long long)q.points.size())
+    throw file_error(side, "n = " + q.meta["n"].dump() + " does not match the " +
+                               std::to_string(q.points.size()) + " points of " + npy_path);
+  return q;
+}
+
+void write_query_set(const std::string& npy_path, const std::vector<Vec3d>& points,
+                     nlohmann::json meta) {
+  meta["n"] = points.size();
+  if (!meta.contains("created_by")) meta["created_by"] = "bvhbench queries";
+  write_npy(npy_path, NpyArray::f8_n3(points));
+  std::string side = sidecar_path(npy_path);
+  std::string tmp = side + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw file_error(side, "cannot write");
+    f << meta.dump(2) << "\n";
+    if (!f) throw file_error(side, "write failed");
+  }
+  if (std::rename(tmp.c_str(), side.c_str()) != 0) throw file_error(side, "cannot rename into place");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rng: xoshiro256** seeded by splitmix64 (Blackman and Vigna). Portable and fast.
+// ---------------------------------------------------------------------------------------------
+namespace {
+std::uint64_t splitmix64(std::uint64_t& x) {
+  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+inline std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+}  // namespace
+
+Rng::Rng(std::uint64_t seed) {
+  std::uint64_t x = seed;
+  for (auto& s : s_) s = splitmix64(x);
+}
+
+std::uint64_t Rng::next() {
+  const std::uint64_t result = rotl(s_[1] * 5, 7) * 9;
+  const std::uint64_t t = s_[1] << 17;
+  s_[2] ^= s_[0];
+  s_[3] ^= s_[1];
+  s_[1] ^= s_[2];
+  s_[0] ^= s_[3];
+  s_[2] ^= t;
+  s_[3] = rotl(s_[3], 45);
+  return result;
+}
+
+double Rng::uniform() { return double(next() >> 11) * 0x1.0p-53; }
+double Rng::uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+
+double Rng::normal() {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  double u1 = uniform(), u2 = uniform();
+  if (u1 < 1e-300) u1 = 1e-300;
+  double r = std::sqrt(-2.0 * std::log(u1));
+  double t = 6.283185307179586476925 * u2;
+  spare_ = r * std::sin(t);
+  has_spare_ = true;
+  return r * std::cos(t);
+}
+
+std::uint64_t Rng::below(std::uint64_t n) {
+  if (n == 0) return 0;
+  // Lemire's nearly-divisionless method is overkill here; rejection keeps it unbiased.
+  std::uint64_t limit = ~std::uint64_t(0) - (~std::uint64_t(0) % n);
+  std::uint64_t x;
+  do x = next();
+  while (x >= limit);
+  return x % n;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed,
+                                    const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta) {
+  const QueryKind* k = find_query_kind(kind);
+  if (!k) {
+    std::string known;
+    for (auto& q : query_kinds()) known += (known.empty() ? "" : ", ") + q.name;
+    throw InputError("unknown query kind '" + kind + "' (known: " + known + ")");
+  }
+  std::map<std::string, double> params = k->defaults;
+  for (auto& [key, v] : given_params) {
+    if (!params.count(key)) {
+      std::string known;
+      for (auto& [d, _] : k->defaults) known += (known.empty() ? "" : ", ") + d;
+      throw InputError("query kind '" + kind + "': unknown parameter '" + key + "' (known: " +
+                       (known.empty() ? "none" : known) + ")");
+    }
+    if (!std::isfinite(v)) throw InputError("query kind '" + kind + "': parameter " + key + " is not finite");
+    params[key] = v;
+  }
+  auto pts = k->generate(mesh, n, seed, params);
+  if (meta) {
+    nlohmann::json m;
+    m["kind"] = kind;
+    m["n"] = pts.size();
+    m["seed"] = seed;
+    m["mesh_sha256"] = mesh.sha256;
+    m["mesh_path"] = mesh.path;
+    m["mesh_triangles"] = mesh.num_triangles();
+    m["ordered"] = k->ordered;
+    m["params"] = params;
+    m["created_by"] = "bvhbench queries";
+    *meta = m;
+  }
+  return pts;
+}
+
+const QueryKind* find_query_kind(const std::string& name) {
+  for (auto& k : query_kinds())
+    if (k.name == name) return &k;
+  return nullptr;
+}
+
+// ---------------------------------------------------------------------------------------------
+// `bvhbench queries --mesh M --kind K --n N --seed S --out Q.npy [--param k=v ...]`
+// ---------------------------------------------------------------------------------------------
+void add_queries_command(CLI::App& app) {
+  struct Opts {
+    std::string mesh, kind = "random", out;
+    std::size_t n = 100000;
+    std::uint64_t seed = 1;
+    std::vector<std::string> params;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand("queries", "Generate a query set (NAME.npy + NAME.json)");
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--kind", o->kind, "Query kind: random, near, haptic, surface ...");
+  cmd->add_option("--n", o->n, "Number of points")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", o->seed, "Random seed");
+  cmd->add_option("--param", o->params, "Generator parameter key=value (repeatable)");
+  cmd->add_option("--out", o->out, "Output .npy (its .json sidecar is written beside it)")->required();
+  cmd->callback([o] {
+    std::map<std::string, double> given;
+    for (auto& kv : o->params) {
+      auto eq = kv.find('=');
+      if (eq == std::string::npos) throw InputError("--param '" + kv + "': expected key=value");
+      char* end = nullptr;
+      std::string v = kv.substr(eq + 1);
+      double d = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end) throw InputError("--param '" + kv + "': value is not a number");
+      given[kv.substr(0, eq)] = d;
+    }
+    if (o->out.size() < 4 || o->out.compare(o->out.size() - 4, 4, ".npy") != 0)
+      throw InputError("--out " + o->out + ": must end in .npy");
+    Mesh mesh = load_mesh(o->mesh);
+    nlohmann::json meta;
+    auto pts = generate_queries(mesh, o->kind, o->n, o->seed, given, &meta);
+    write_query_set(o->out, pts, meta);
+  });
+}
+
+}  // namespace bvhbench

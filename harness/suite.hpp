@@ -1,0 +1,57 @@
+#pragma once
+/// Suites: a YAML matrix of jobs (suites/*.yml), each run in its own child process with a time
+/// limit and an address-space limit, so that a crash, a hang or a blow-up becomes a status row.
+/// Format: see suites/README.md.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "method.hpp"
+
+namespace bvhbench {
+
+/// How to make one query set.
+struct QueryPlan {
+  std::string kind = "random";
+  std::size_t n = 10000;
+  std::uint64_t seed = 1;
+  std::map<std::string, double> params;
+  std::string label() const;  ///< "random-n10000-s1[-<hash of params>]"
+};
+
+struct MeshPlan {
+  std::string name;  ///< short name used in job ids
+  std::string path;  ///< resolved against the suite file's folder
+};
+
+struct JobPlan {
+  std::string id;    ///< unique, filesystem-safe, stable across runs
+  MeshPlan mesh;
+  QueryPlan queries;
+  QueryType query = QueryType::inside;
+  std::string method_spec;
+};
+
+struct SuiteConfig {
+  std::string name;
+  std::string file;
+  int repeat = 5;
+  double timeout_s = 600;
+  double memory_limit_mb = 16384;
+  bool truth = true;  ///< attach the oracle (bvhbench truth) when it can be computed
+  std::vector<JobPlan> jobs;
+};
+
+/// Parses and expands a suite file. Throws InputError naming the file and the problem.
+SuiteConfig load_suite(const std::string& path);
+
+/// The flat summary row of one result (also used by compare and tests).
+std::vector<std::string> summary_header();
+std::vector<std::string> summary_row(const nlohmann::json& result);
+/// Writes summary.csv for these results atomically.
+void write_summary_csv(const std::string& path, const std::vector<nlohmann::json>& results);
+
+}  // namespace bvhbench

@@ -1,0 +1,76 @@
+// fault: a testing-only method that fails on purpose, so that tests can check that a suite
+// turns a crash, a hang, a blow-up or an exception into a status row and goes on.
+// Listed by `bvhbench methods --all` only.
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <thread>
+#include <vector>
+
+#include "mesh.hpp"
+#include "registry.hpp"
+
+namespace bvhbench {
+namespace {
+
+class Fault final : public Method {
+ public:
+  explicit Fault(const Params& p) : mode_(p.get("mode")), at_(p.get("at")) {}
+
+  void build(const Mesh& mesh, const BuildContext&) override {
+    n_ = mesh.num_triangles();
+    if (at_ == "build") trigger();
+  }
+  bool supports(QueryType) const override { return true; }
+  bool inside(const Vec3d& p) override {
+    if (at_ == "query") trigger();
+    return p.x < 0;
+  }
+  DistanceResult distance(const Vec3d& p) override {
+    if (at_ == "query") trigger();
+    DistanceResult r;
+    r.distance = p.x;
+    return r;
+  }
+  std::size_t structure_bytes() const override { return sizeof(*this); }
+
+ private:
+  void trigger() {
+    if (mode_ == "crash") {
+      std::raise(SIGSEGV);
+    } else if (mode_ == "abort") {
+      std::abort();
+    } else if (mode_ == "hang") {
+      for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+    } else if (mode_ == "oom") {
+      // Grow until the allocator fails (the suite's address-space limit) or the OS says no.
+      std::vector<char*> blocks;
+      for (;;) {
+        char* b = new char[256 << 20];
+        std::memset(b, 1, 256 << 20);
+        blocks.push_back(b);
+      }
+    } else if (mode_ == "throw") {
+      throw std::runtime_error("fault: deliberate exception");
+    }
+  }
+  std::string mode_, at_;
+  std::size_t n_ = 0;
+};
+
+}  // namespace
+}  // namespace bvhbench
+
+void bvhbench_register_fault(bvhbench::Registry& r) {
+  using namespace bvhbench;
+  MethodInfo m;
+  m.name = "fault";
+  m.description = "Testing only: fails on purpose (crash, abort, hang, oom, throw) to test job isolation";
+  m.caps = {true, true, false, false, false};
+  m.params = {{"mode", ParamType::choice, "none", "what goes wrong", {"none", "crash", "abort", "hang", "oom", "throw"}},
+              {"at", ParamType::choice, "query", "when it goes wrong", {"build", "query"}}};
+  m.create = [](const Params& p) { return std::make_unique<Fault>(p); };
+  m.testing_only = true;
+  r.add(std::move(m));
+}
