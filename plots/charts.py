@@ -1,0 +1,492 @@
+"""The report's charts: one function per chart, registered in CHARTS.
+
+A chart function takes a ResultSet and returns a matplotlib Figure, or raises NoData(reason)
+when the suite has nothing for it to show (the report then says so instead of drawing an empty
+frame). Adding a chart is one function and one CHARTS entry; report.py saves it as PNG and SVG.
+Only ok jobs with the needed values are drawn; non-ok jobs appear in the report's tables.
+"""
+import math
+from collections import namedtuple
+from functools import partial
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+import fmt
+import tables
+from metrics import METRICS, axis_label, pareto_front
+from results_io import representative_configs
+from style import (DPI, FIGSIZE_PANEL, HAPTIC_DEADLINE_NS, HAPTIC_RATE_HZ, STATUS_COLORS,
+                   STATUS_LABELS, STATUS_SEVERITY, method_color, method_marker,
+                   method_sort_key)
+
+
+class NoData(Exception):
+    """The suite holds nothing this chart could show."""
+
+
+Chart = namedtuple("Chart", "func title caption")
+
+KIND_ORDER = ["random", "near", "haptic"]
+MAX_PANELS = 9
+
+
+def _kind_key(k):
+    return (KIND_ORDER.index(k) if k in KIND_ORDER else len(KIND_ORDER), k)
+
+
+def _grid(n, max_cols=3, panel=FIGSIZE_PANEL, legend_width=2.3):
+    cols = min(n, max_cols)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, squeeze=False,
+                             figsize=(panel[0] * cols + legend_width, panel[1] * rows),
+                             dpi=DPI)
+    flat = list(axes.flat)
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return fig, flat[:n]
+
+
+def _finish(fig, handles, legend_title=None, note=None):
+    """Legend outside the axes, on the right, so it never hides a point."""
+    fig.tight_layout(rect=(0, 0.04 if note else 0, 1, 1))
+    if handles:
+        fig.subplots_adjust(right=1 - 2.3 / fig.get_figwidth())
+        fig.legend(handles=handles, loc="center left", title=legend_title, fontsize=8,
+                   title_fontsize=8, bbox_to_anchor=(1 - 2.25 / fig.get_figwidth(), 0.5),
+                   frameon=False)
+    if note:
+        fig.text(0.01, 0.01, note, fontsize=7, color="#444444", ha="left", va="bottom")
+    return fig
+
+
+def _method_handle(method, label=None, line=True):
+    return Line2D([], [], color=method_color(method), marker=method_marker(method),
+                  linestyle="-" if line else "none", label=label or method, markersize=6)
+
+
+def _time_formatter(ax, axis="x"):
+    f = FuncFormatter(lambda v, _: fmt.duration_ns(v))
+    (ax.xaxis if axis == "x" else ax.yaxis).set_major_formatter(f)
+
+
+def _si_formatter(unit=""):
+    return FuncFormatter(lambda v, _: fmt.si(v, unit, 3).replace(" ", "\u2009"))
+
+
+def _log_floor(values, default=1e-6):
+    """Position standing for 0 on a log axis: a decade below the smallest positive value."""
+    pos = [v for v in values if v and v > 0]
+    if not pos:
+        return default
+    return 10.0 ** (math.floor(math.log10(min(pos))) - 1)
+
+
+def _mesh_title(rs, mesh, extra=""):
+    t = rs.mesh_triangles(mesh)
+    s = f"{mesh} ({fmt.count(t)} triangles)" if t else mesh
+    return s + (f" · {extra}" if extra else "")
+
+
+# ---------------------------------------------------------------------------------------------
+# Speed against accuracy (Pareto)
+# ---------------------------------------------------------------------------------------------
+def pareto_chart(rs, query, x_metric, y_metric="qps"):
+    """Every configuration of every method a point; each method's Pareto frontier a line.
+
+    One panel per (model, query path). Zero error is clamped to a floor labelled 'exact'.
+    """
+    xm, ym = METRICS[x_metric], METRICS[y_metric]
+    jobs = [j for j in rs.model_jobs() if j.ok and j.query == query]
+    pts = [(j, xm.getter(j), ym.getter(j)) for j in jobs]
+    no_oracle = sum(1 for _, x, y in pts if x is None and y is not None)
+    pts = [(j, x, y) for j, x, y in pts if x is not None and y is not None and y > 0]
+    if not pts:
+        raise NoData(f"no ok `{query}` job has both {xm.label.lower()} and "
+                     f"{ym.label.lower()}" + (f" ({no_oracle} ran without an oracle)"
+                                              if no_oracle else ""))
+    panels = sorted({(j.mesh, j.kind) for j, _, _ in pts},
+                    key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), _kind_key(p[1])))
+    dropped = len(panels) - MAX_PANELS
+    panels = sorted(panels[:MAX_PANELS],
+                    key=lambda p: (rs.mesh_triangles(p[0]) or 0, _kind_key(p[1])))
+    fig, axes = _grid(len(panels))
+    floor = _log_floor([x for _, x, _ in pts]) if xm.log else None
+    methods = sorted({j.method for j, _, _ in pts}, key=method_sort_key)
+    any_floor = False
+    for ax, (mesh, kind) in zip(axes, panels):
+        here = [(j, x, y) for j, x, y in pts if j.mesh == mesh and j.kind == kind]
+        for method in methods:
+            mp = [(max(x, floor) if floor else x, y, j) for j, x, y in here
+                  if j.method == method]
+            if not mp:
+                continue
+            any_floor |= any(p[0] == floor for p in mp)
+            c, mk = method_color(method), method_marker(method)
+            z = 3 if method == tables.STAR else 2
+            ax.scatter([p[0] for p in mp], [p[1] for p in mp], color=c, marker=mk, s=30,
+                       alpha=0.45, zorder=z, linewidths=1)
+            front = pareto_front(mp, xm.better, ym.better)
+            ax.plot([p[0] for p in front], [p[1] for p in front], color=c, marker=mk,
+                    markersize=6, linewidth=1.6, zorder=z + 1)
+            if len({p[2].params_key for p in mp}) > 1:
+                for x, y, j in front:
+                    ax.annotate(j.params_key or "default", (x, y), textcoords="offset points",
+                                xytext=(4, 3), fontsize=6, color=c)
+        ax.set_title(_mesh_title(rs, mesh, f"{kind} path"), fontsize=9)
+        if xm.log:
+            ax.set_xscale("log")
+        if ym.log:
+            ax.set_yscale("log")
+        ax.grid(True, which="major", alpha=0.3)
+        ax.set_xlabel(axis_label(xm), fontsize=8)
+        ax.set_ylabel(axis_label(ym), fontsize=8)
+        ax.tick_params(labelsize=7)
+        if ym.unit == "queries/s":
+            ax.yaxis.set_major_formatter(_si_formatter("q/s"))
+            ax.yaxis.set_minor_formatter(NullFormatter())
+        better_x = "left" if xm.better == "lower" else "right"
+        better_y = "top" if ym.better == "higher" else "bottom"
+        ax.text(0.02 if better_x == "left" else 0.98, 0.97 if better_y == "top" else 0.03,
+                "better", transform=ax.transAxes, fontsize=7, color="#888888",
+                ha=better_x, va=better_y, style="italic")
+    if floor:
+        lo = floor / 3
+        hi = max(x for _, x, _ in pts) * 3
+        for ax in axes:
+            ax.set_xlim(lo, max(hi, floor * 100))
+            ax.xaxis.set_major_locator(LogLocator(base=10, numticks=8))
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            ax.axvspan(lo, floor * math.sqrt(10), color="#eeeeee", zorder=0)
+            ticks = [t for t in ax.get_xticks() if floor * 5 < t <= hi * 3]
+            ax.set_xticks([floor] + ticks)
+            ax.set_xticklabels([xm.zero_label or "0"] + [f"$10^{{{round(math.log10(t))}}}$"
+                                                         for t in ticks])
+            ax.set_xlim(lo, max(hi, floor * 100))
+    handles = [_method_handle(m) for m in methods]
+    handles.append(Line2D([], [], color="#555555", marker="o", linestyle="none", alpha=0.45,
+                          label="one configuration"))
+    handles.append(Line2D([], [], color="#555555", marker="o", linestyle="-",
+                          label="Pareto frontier"))
+    note = []
+    if any_floor:
+        note.append(f"'{xm.zero_label}' (grey band): no error measured, drawn at {floor:.0e}.")
+    if no_oracle:
+        note.append(f"{no_oracle} ok jobs without an oracle are not drawn.")
+    if dropped > 0:
+        note.append(f"{dropped} smaller model/path panels omitted.")
+    return _finish(fig, handles, "method", " ".join(note))
+
+
+# ---------------------------------------------------------------------------------------------
+# Scaling with model size
+# ---------------------------------------------------------------------------------------------
+def _rep_jobs(rs):
+    jobs = rs.model_jobs()
+    reps = representative_configs(jobs)
+    return [j for j in jobs if j.params_key == reps.get(j.method)], reps
+
+
+def _legend_label(method, reps):
+    return method + (f" ({reps[method]})" if reps.get(method) else "")
+
+
+def _failed_marks(ax, failed, method):
+    """Non-ok jobs as crosses on the bottom edge, at their model size."""
+    xs = [j.triangles for j in failed if j.method == method and j.triangles]
+    if xs:
+        ax.scatter(xs, [0.02] * len(xs), transform=ax.get_xaxis_transform(), marker="x",
+                   color=method_color(method), s=40, linewidths=1.8, zorder=4, clip_on=False)
+
+
+def _series(jobs, method, getter):
+    """(triangles, median value) per model for one method, sorted by size."""
+    by_t = {}
+    for j in jobs:
+        if j.method == method and j.ok and j.triangles:
+            v = getter(j)
+            if v is not None and v > 0:
+                by_t.setdefault(j.triangles, []).append(v)
+    xs = sorted(by_t)
+    return xs, [float(np.median(by_t[x])) for x in xs]
+
+
+def _size_axis(ax):
+    ax.set_xscale("log")
+    ax.set_xlabel("Model size [triangles]", fontsize=8)
+    ax.xaxis.set_major_formatter(_si_formatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.tick_params(labelsize=7)
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def throughput_vs_size(rs):
+    jobs, reps = _rep_jobs(rs)
+    combos = sorted({(j.query, j.kind) for j in jobs if j.ok and j.qps},
+                    key=lambda p: (p[0] != "inside", _kind_key(p[1])))
+    if not combos:
+        raise NoData("no ok job with a throughput on a regular model")
+    methods = sorted({j.method for j in jobs}, key=method_sort_key)
+    fig, axes = _grid(len(combos), max_cols=2)
+    any_failed = False
+    for ax, (query, kind) in zip(axes, combos):
+        here = [j for j in jobs if j.query == query and j.kind == kind]
+        for m in methods:
+            xs, ys = _series(here, m, lambda j: j.qps)
+            if xs:
+                ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6,
+                        zorder=3 if m == tables.STAR else 2)
+            failed = [j for j in here if j.method == m and not j.ok
+                      and j.status != "unsupported"]
+            any_failed |= bool(failed)
+            _failed_marks(ax, failed, m)
+        ax.axhline(HAPTIC_RATE_HZ, color="black", linestyle="--", linewidth=1)
+        ax.text(0.99, HAPTIC_RATE_HZ, "1 kHz haptic rate", transform=ax.get_yaxis_transform(),
+                ha="right", va="bottom", fontsize=7)
+        _size_axis(ax)
+        ax.set_yscale("log")
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(min(lo, HAPTIC_RATE_HZ / 3), max(hi, HAPTIC_RATE_HZ * 3))
+        ax.yaxis.set_major_formatter(_si_formatter("q/s"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
+        ax.set_title(f"{query} · {kind} path", fontsize=9)
+    handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
+    if any_failed:
+        handles.append(Line2D([], [], color="#555555", marker="x", linestyle="none",
+                              label="did not finish ok\n(see non-ok table)"))
+    return _finish(fig, handles, "method")
+
+
+def memory_vs_size(rs):
+    jobs, reps = _rep_jobs(rs)
+    methods = sorted({j.method for j in jobs}, key=method_sort_key)
+    bpt, rss = METRICS["bytes_per_triangle"].getter, METRICS["peak_rss"].getter
+    if not any(bpt(j) or rss(j) for j in jobs if j.ok):
+        raise NoData("no ok job reports its memory")
+    fig, axes = _grid(2, max_cols=2)
+    for m in methods:
+        for ax, get in zip(axes, (bpt, rss)):
+            xs, ys = _series(jobs, m, get)
+            if xs:
+                ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6)
+    # The mesh itself, for scale: what any method must at least hold.
+    mesh_pts = {}
+    for j in jobs:
+        mb = j.num("memory.mesh_bytes")
+        if mb and j.triangles:
+            mesh_pts[j.triangles] = mb
+    if mesh_pts:
+        xs = sorted(mesh_pts)
+        axes[1].plot(xs, [mesh_pts[x] for x in xs], color="black", linestyle=":", linewidth=1)
+        axes[0].plot(xs, [mesh_pts[x] / x for x in xs], color="black", linestyle=":",
+                     linewidth=1)
+    axes[0].set_ylabel("Structure size [bytes/triangle]\n(\u2190 lower is better)", fontsize=8)
+    axes[0].set_title("Structure bytes per triangle (method's own count)", fontsize=9)
+    axes[1].set_ylabel("Peak RSS [bytes]\n(\u2190 lower is better)", fontsize=8)
+    axes[1].set_title("Peak resident memory of the job", fontsize=9)
+    for ax in axes:
+        _size_axis(ax)
+        ax.set_yscale("log")
+    axes[1].yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt.nbytes(v)))
+    axes[1].yaxis.set_minor_formatter(NullFormatter())
+    handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
+    if mesh_pts:
+        handles.append(Line2D([], [], color="black", linestyle=":", label="the mesh itself"))
+    return _finish(fig, handles, "method")
+
+
+def build_time_vs_size(rs):
+    jobs, reps = _rep_jobs(rs)
+    methods = sorted({j.method for j in jobs}, key=method_sort_key)
+    if not any(j.build_seconds for j in jobs if j.ok):
+        raise NoData("no ok job reports a build time")
+    fig, axes = _grid(1)
+    ax = axes[0]
+    for m in methods:
+        xs, ys = _series(jobs, m, lambda j: j.build_seconds)
+        if xs:
+            ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6)
+    _size_axis(ax)
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt.seconds(v)))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_ylabel("Build time [s]\n(\u2190 lower is better)", fontsize=8)
+    ax.set_title("Build time (median over the model's jobs)", fontsize=9)
+    return _finish(fig, [_method_handle(m, _legend_label(m, reps)) for m in methods], "method")
+
+
+# ---------------------------------------------------------------------------------------------
+# Latency on haptic paths
+# ---------------------------------------------------------------------------------------------
+PERCENTILES = [("p50", 0.5), ("p99", 0.01), ("p999", 0.001)]
+
+
+def latency_haptic(rs):
+    """Exceedance plot: share of queries slower than x, from the recorded percentiles.
+
+    The results carry only p50, p99, p99.9 and max, so those are the only points drawn; the
+    dotted lines between them are a guide for the eye, not data.
+    """
+    jobs, reps = _rep_jobs(rs)
+    jobs = [j for j in jobs if j.ok and j.kind == "haptic" and j.num("queries.latency_ns.p50")]
+    if not jobs:
+        raise NoData("no ok job on a haptic path records latency percentiles")
+    panels = sorted({(j.query, j.mesh) for j in jobs},
+                    key=lambda p: (p[0] != "inside", -(rs.mesh_triangles(p[1]) or 0)))
+    # Largest models first, at most 3 per query kind.
+    per_q = {}
+    panels = [p for p in panels if per_q.setdefault(p[0], []).append(p) or
+              len(per_q[p[0]]) <= 3]
+    fig, axes = _grid(len(panels), max_cols=3, legend_width=0.6)
+    all_n = [j.n_queries for j in jobs if j.n_queries]
+    y_lo = 0.5 / max(all_n) if all_n else 1e-4
+    for ax, (query, mesh) in zip(axes, panels):
+        here = sorted([j for j in jobs if j.query == query and j.mesh == mesh],
+                      key=lambda j: method_sort_key(j.method))
+        handles = []
+        for j in here:
+            n = j.n_queries
+            xs, ys = [], []
+            for key, share in PERCENTILES:
+                v = j.num("queries.latency_ns." + key)
+                if v:
+                    xs.append(v)
+                    ys.append(share)
+            vmax = j.num("queries.latency_ns.max")
+            if vmax and n:
+                xs.append(vmax)
+                ys.append(1.0 / n)
+            c, mk = method_color(j.method), method_marker(j.method)
+            ax.plot(xs, ys, color=c, marker=mk, linestyle=":", linewidth=1.2, markersize=6)
+            over = j.num("queries.over_deadline")
+            share = f"{100.0 * over / n:.2g}% > 1 ms" if over is not None and n else "? > 1 ms"
+            handles.append(Line2D([], [], color=c, marker=mk, linestyle=":",
+                                  label=f"{j.method}: {share}"))
+        deadline = j.num("queries.deadline_ns") or HAPTIC_DEADLINE_NS
+        ax.axvline(deadline, color="black", linestyle="--", linewidth=1)
+        ax.text(deadline, 0.98, " 1 ms deadline", transform=ax.get_xaxis_transform(),
+                fontsize=7, va="top", ha="left")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        lo = min(min(l.get_xdata()) for l in ax.get_lines() if len(l.get_xdata()) > 1
+                 and l.get_linestyle() == ":") if here else 1e2
+        ax.set_xlim(lo / 2, max(deadline * 5, ax.get_xlim()[1]))
+        ax.axvspan(deadline, ax.get_xlim()[1], color="#fde0dd", zorder=0)
+        ax.set_ylim(y_lo, 1.0)
+        ax.set_yticks([1.0, 0.5, 0.1, 0.01, 0.001, 1e-4, 1e-5, 1e-6][:8])
+        ax.set_yticks([t for t in ax.get_yticks() if t >= y_lo])
+        ax.yaxis.set_major_formatter(FuncFormatter(
+            lambda v, _: f"{100 * v:g}%" if v >= 1e-4 else f"{100 * v:.0e}%"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        _time_formatter(ax, "x")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.tick_params(labelsize=7)
+        ax.grid(True, which="major", alpha=0.3)
+        ax.set_xlabel("Per-query latency (\u2190 lower is better)", fontsize=8)
+        ax.set_ylabel("Share of queries slower than x", fontsize=8)
+        ax.set_title(_mesh_title(rs, mesh, f"{query}, haptic path"), fontsize=9)
+        ax.legend(handles=handles, fontsize=7, loc="lower left", framealpha=0.85)
+    note = ("Points: p50, p99, p99.9 and max (at 1/n) of one replay; dotted lines only join "
+            "them. Shaded: beyond the 1 ms haptic deadline.")
+    return _finish(fig, [], None, note)
+
+
+# ---------------------------------------------------------------------------------------------
+# Stability matrix
+# ---------------------------------------------------------------------------------------------
+def stability_matrix(rs):
+    if not rs.is_stability_suite():
+        raise NoData("the suite has no stress meshes")
+    data = tables.stability_cells(rs)
+    queries = list(data)
+    n_cfg = max(len(data[q][0]) for q in queries)
+    n_mesh = max(len(data[q][1]) for q in queries)
+    w = max(4.0, 0.9 * n_mesh + 2.8)
+    fig, axes = plt.subplots(1, len(queries), squeeze=False, dpi=DPI,
+                             figsize=(w * len(queries) + 2.2, 0.45 * n_cfg + 2.6))
+    cmap = ListedColormap([STATUS_COLORS[s] for s in STATUS_SEVERITY])
+    used = set()
+    for ax, query in zip(axes[0], queries):
+        configs, meshes, cells = data[query]
+        grid = np.array([[STATUS_SEVERITY.index(cells[(c, m)]["status"]) for m in meshes]
+                         for c in configs])
+        used |= {cells[k]["status"] for k in cells}
+        ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(STATUS_SEVERITY) - 0.5, aspect="auto")
+        for i, c in enumerate(configs):
+            for k, m in enumerate(meshes):
+                cell = cells[(c, m)]
+                dark = cell["status"] in ("crash", "oom", "timeout")
+                ax.text(k, i, tables.cell_text(query, cell), ha="center", va="center",
+                        fontsize=7, color="white" if dark else "black",
+                        fontweight="bold" if cell["status"] == "ok_wrong" else "normal")
+        ax.set_xticks(range(len(meshes)))
+        ax.set_xticklabels(meshes, rotation=35, ha="right", fontsize=7)
+        ax.set_yticks(range(len(configs)))
+        ax.set_yticklabels(configs, fontsize=7)
+        ax.set_xticks(np.arange(-0.5, len(meshes)), minor=True)
+        ax.set_yticks(np.arange(-0.5, len(configs)), minor=True)
+        ax.grid(which="minor", color="white", linewidth=2)
+        ax.tick_params(which="minor", length=0)
+        what = ("cell text: wrong-answer rate" if query == "inside"
+                else "cell text: worst distance error / diagonal")
+        ax.set_title(f"{query} · {what}", fontsize=9)
+        ax.set_xlabel("stress case", fontsize=8)
+    handles = [Patch(facecolor=STATUS_COLORS[s], edgecolor="#999999", label=STATUS_LABELS[s])
+               for s in STATUS_SEVERITY if s in used]
+    fig.tight_layout()
+    fig.subplots_adjust(right=1 - 2.0 / fig.get_figwidth())
+    fig.legend(handles=handles, loc="center left", fontsize=8, frameon=False,
+               bbox_to_anchor=(1 - 1.95 / fig.get_figwidth(), 0.5), title="status",
+               title_fontsize=8)
+    return fig
+
+
+# ---------------------------------------------------------------------------------------------
+# The registry. Order is the order in report.md.
+# ---------------------------------------------------------------------------------------------
+CHARTS = {
+    "pareto_inside_wrong_rate": Chart(
+        partial(pareto_chart, query="inside", x_metric="inside_wrong_rate"),
+        "Point-in-solid: speed against wrong answers",
+        "Throughput against the share of wrong `inside` answers. Up and left is better. Every "
+        "configuration of a sweep is a faint point; the line joins each method's Pareto "
+        "frontier (the configurations no other of its configurations beats on both axes)."),
+    "pareto_inside_wrong_rate_far": Chart(
+        partial(pareto_chart, query="inside", x_metric="inside_wrong_rate_far"),
+        "Point-in-solid: speed against wrong answers far from the surface",
+        "As above, counting only queries farther than the near-surface threshold "
+        "(1e-6 × diagonal) from the surface, where any wrong answer is a real error."),
+    "pareto_distance_rel_err_p99": Chart(
+        partial(pareto_chart, query="distance", x_metric="dist_rel_err_p99"),
+        "Distance: speed against error",
+        "Throughput against the 99th percentile of the signed-distance error, as a fraction "
+        "of the mesh diagonal. Up and left is better."),
+    "throughput_vs_size": Chart(
+        throughput_vs_size, "Throughput against model size",
+        "Median queries per second of each method (one configuration per method, named in the "
+        "legend) on each regular model, log-log. The dashed line is the 1 kHz rate a haptic "
+        "loop needs. Crosses on the bottom edge: jobs that crashed, timed out or failed."),
+    "memory_vs_size": Chart(
+        memory_vs_size, "Memory against model size",
+        "Left: the structure's own byte count per triangle. Right: the job's peak resident "
+        "set size. They answer different questions; neither replaces the other."),
+    "build_time_vs_size": Chart(
+        build_time_vs_size, "Build time against model size",
+        "Seconds to build each method's structure, log-log."),
+    "latency_haptic": Chart(
+        latency_haptic, "Latency on haptic paths",
+        "For each method, the share of queries slower than a given latency, from the recorded "
+        "percentiles (p50, p99, p99.9, max). The dashed line is the 1 ms haptic deadline; the "
+        "legend gives the share of queries that missed it."),
+    "stability_matrix": Chart(
+        stability_matrix, "Stability matrix",
+        "Each method configuration (rows) on each stress case (columns). Colour: the worst "
+        "status of its jobs; 'ok, wrong answers' marks answers beyond the accuracy tolerance. "
+        "Text: the wrong-answer rate (inside) or the worst relative distance error (distance) "
+        "of ok cells; 'n/a' = unsupported, 'ok?' = no oracle."),
+}

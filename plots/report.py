@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""Build the report of one result set.
+
+    python plots/report.py results/NAME [--out DIR] [--strict]
+
+Reads results/NAME/runs/*.json (and cross-checks summary.csv); writes into results/NAME/report/
+(or --out): one PNG and one SVG per chart (see charts.CHARTS), report.md showing them, the
+paper's tables as paper_table.md and paper_table.tex, and, for suites with stress meshes,
+stability.csv and stability.md.
+
+Exit codes: 0 report written; 1 some chart failed to draw (report written without it);
+2 bad usage or no results to report on.
+"""
+import argparse
+import os
+import sys
+import traceback
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+import charts  # noqa: E402
+import tables  # noqa: E402
+from results_io import ReportError, load  # noqa: E402
+
+
+def write(path, text):
+    """Write atomically, like the harness: a reader never sees half a file."""
+    tmp = path + ".tmp"
+    with open(path + ".tmp", "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+def draw_charts(rs, out, strict):
+    """{name: ("ok", files) | ("nodata", reason) | ("failed", error)}"""
+    done = {}
+    for name, chart in charts.CHARTS.items():
+        try:
+            fig = chart.func(rs)
+        except charts.NoData as e:
+            done[name] = ("nodata", str(e))
+            continue
+        except Exception as e:  # one broken chart must not cost the whole report
+            if strict:
+                raise
+            traceback.print_exc()
+            done[name] = ("failed", f"{type(e).__name__}: {e}")
+            continue
+        files = []
+        for ext in ("png", "svg"):
+            f = f"{name}.{ext}"
+            fig.savefig(os.path.join(out, f), bbox_inches="tight")
+            files.append(f)
+        plt.close(fig)
+        done[name] = ("ok", files)
+    return done
+
+
+def build_markdown(rs, drawn, paper_md):
+    ctx = tables.context_line(rs)
+    warn_h, warn_rows, unchecked = tables.accuracy_warnings(rs)
+    failed_h, failed_rows = tables.failed_table(rs)
+    n_ok = len(rs.ok_jobs)
+    md = [f"# bvhbench report: `{rs.name}`", "",
+          ctx, "",
+          f"{len(rs.jobs)} jobs: {n_ok} ok, {len(failed_rows)} not ok"
+          + (f", **{len(warn_rows)} ok jobs with wrong answers**" if warn_rows else "")
+          + (f", {len(unchecked)} ok jobs without an oracle" if unchecked else "") + ".", ""]
+
+    md += ["## Accuracy warnings", ""]
+    if warn_rows:
+        md += [f"> **\u26a0 {len(warn_rows)} job(s) finished `ok` but gave wrong answers** "
+               f"(inside: wrong far from the surface; distance: error above "
+               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal). Their speed figures below "
+               "are not comparable to exact methods'.", "",
+               ctx, "", tables.render_md(warn_h, warn_rows)]
+    else:
+        md += ["None: every ok job checked against the oracle is within tolerance.", ""]
+    if unchecked:
+        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
+               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
+               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
+
+    md += ["## The paper's tables", "", paper_md]
+
+    for name, chart in charts.CHARTS.items():
+        state, detail = drawn[name]
+        md += [f"## {chart.title}", ""]
+        if state == "ok":
+            png, svg = detail
+            md += [f"![{chart.title}]({png})", "", chart.caption + f" ([SVG]({svg}))", ""]
+        elif state == "nodata":
+            md += [f"_Not drawn: {detail}._", ""]
+        else:
+            md += [f"**Chart failed to draw:** `{detail}`", ""]
+        if name == "stability_matrix" and state == "ok":
+            md += [ctx, "", tables.stability_matrix_md(rs),
+                   "Also as [stability.csv](stability.csv) and [stability.md](stability.md).",
+                   ""]
+
+    md += ["## Jobs that did not finish ok", ""]
+    if failed_rows:
+        md += [ctx, "", tables.render_md(failed_h, failed_rows)]
+    else:
+        md += ["None.", ""]
+    if rs.unreadable:
+        md += ["Unreadable result files (not counted above):", ""]
+        md += [f"- `{f}`: {why}" for f, why in rs.unreadable] + [""]
+    if rs.summary_only:
+        md += [f"Jobs listed in summary.csv without a result file: "
+               + ", ".join(f"`{j}`" for j in rs.summary_only) + ".", ""]
+
+    md += ["## Machine and run", ""]
+    h, rows = tables.context_table(rs)
+    md += [tables.render_md(h, rows)]
+    return "\n".join(md)
+
+
+def build_paper(rs, out):
+    """Writes paper_table.md and paper_table.tex; returns the Markdown."""
+    (mh, mrows, mbold), (rh, rrows, _) = tables.paper_tables(rs)
+    ctx = tables.context_line(rs)
+    notes = tables.paper_notes(rs)
+    md = (f"Per model: the EBP-Octree (bold) beside each peer. {ctx}\n\n"
+          + tables.render_md(mh, [[f"**{c}**" if i in mbold and c != "–" else c for c in r]
+                                  for i, r in enumerate(mrows)])
+          + "\nRatios (above 1× the EBP-Octree is better). " + ctx + "\n\n"
+          + (tables.render_md(rh, rrows) if rrows else
+             "_No model has both an ebp_octree row and a peer row._\n")
+          + "\n" + notes + "\n")
+    write(os.path.join(out, "paper_table.md"), f"# The paper's tables: `{rs.name}`\n\n" + md)
+    tex = ["% Generated by plots/report.py; needs \\usepackage{booktabs}.",
+           tables.render_tex(mh, mrows, "Query rates and structure sizes per model; EBP-Octree "
+                             "in bold. " + notes + " " + ctx, "tab:bvhbench-paper", mbold)]
+    if rrows:
+        tex.append(tables.render_tex(rh, rrows, "EBP-Octree against each peer; above 1x the "
+                                     "EBP-Octree is better. " + ctx, "tab:bvhbench-ratios"))
+    write(os.path.join(out, "paper_table.tex"), "\n".join(tex))
+    return md
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description="Charts and tables from a bvhbench result set.")
+    ap.add_argument("results", help="result directory, e.g. results/default")
+    ap.add_argument("--out", help="output directory (default: RESULTS/report)")
+    ap.add_argument("--strict", action="store_true",
+                    help="let a chart's exception propagate (for debugging and tests)")
+    args = ap.parse_args(argv)
+    try:
+        rs = load(args.results)
+    except ReportError as e:
+        print(f"report: {e}", file=sys.stderr)
+        return 2
+    out = args.out or os.path.join(args.results, "report")
+    os.makedirs(out, exist_ok=True)
+
+    drawn = draw_charts(rs, out, args.strict)
+    paper_md = build_paper(rs, out)
+    if rs.is_stability_suite():
+        h, rows = tables.stability_table(rs)
+        write(os.path.join(out, "stability.csv"), tables.render_csv(h, rows))
+        write(os.path.join(out, "stability.md"),
+              f"# Stability matrix: `{rs.name}`\n\n{tables.context_line(rs)}\n\n"
+              + tables.stability_matrix_md(rs) + "\n" + tables.render_md(h, rows))
+    write(os.path.join(out, "report.md"), build_markdown(rs, drawn, paper_md))
+
+    failed = [n for n, (s, _) in drawn.items() if s == "failed"]
+    n_charts = sum(1 for s, _ in drawn.values() if s == "ok")
+    print(f"report: {len(rs.jobs)} jobs, {n_charts} charts -> {os.path.join(out, 'report.md')}",
+          file=sys.stderr)
+    if failed:
+        print(f"report: charts that failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,295 @@
+"""Loading a result set (`results/NAME/`) into plain Python objects.
+
+The per-job JSON files in `runs/` are authoritative (schema: docs/results.md); `summary.csv` is
+only cross-checked. Nothing here assumes a block is present: failed jobs have no `queries`,
+jobs without an oracle have `accuracy: null`, methods report free-form `structure` blocks.
+Every accessor returns None when a value is missing, so charts can simply skip it.
+"""
+import csv
+import json
+import os
+import re
+import sys
+from collections import OrderedDict
+
+OK = "ok"
+KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oom", "error")
+
+# Names that mark a mesh as a stress case (degenerate, broken, adversarial input).
+STRESS_NAME_RE = re.compile(
+    r"stress|degenerate|duplicate|sliver|nonmanifold|non_manifold|open_|holes?|"
+    r"self_?intersect|flipped|zero_area|needle|cap_|coplanar|tiny|huge_coord",
+    re.IGNORECASE)
+
+
+class ReportError(Exception):
+    """A problem with the input that the user must fix (reported with exit code 2)."""
+
+
+def dig(d, path, default=None):
+    """d['a']['b']['c'] for path 'a.b.c', or default when any step is missing or null."""
+    cur = d
+    for key in path.split("."):
+        if not isinstance(cur, dict) or key not in cur or cur[key] is None:
+            return default
+        cur = cur[key]
+    return cur
+
+
+def as_float(x):
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if v == v else None  # NaN -> None
+
+
+class Job:
+    """One result file. `raw` is the parsed JSON; properties read it defensively."""
+
+    def __init__(self, raw, path):
+        self.raw = raw
+        self.path = path
+
+    def get(self, path, default=None):
+        return dig(self.raw, path, default)
+
+    def num(self, path):
+        return as_float(self.get(path))
+
+    # --- identity -------------------------------------------------------------------------
+    @property
+    def id(self):
+        return self.get("job.id") or os.path.splitext(os.path.basename(self.path))[0]
+
+    @property
+    def method(self):
+        return self.get("job.method") or str(self.get("job.method_spec", "?")).split(":")[0]
+
+    @property
+    def params_key(self):
+        key = self.get("job.params_key")
+        if key is None:
+            spec = self.get("job.method_spec", "")
+            key = spec.split(":", 1)[1] if ":" in spec else ""
+        return key
+
+    @property
+    def config(self):
+        """A method with its non-default parameters, e.g. 'ebp_octree:leaf_factor=5'."""
+        return self.method + (":" + self.params_key if self.params_key else "")
+
+    @property
+    def query(self):
+        return self.get("job.query", "?")
+
+    @property
+    def kind(self):
+        return self.get("job.queries.kind", "?")
+
+    @property
+    def mesh(self):
+        name = self.get("job.mesh.name")
+        if name:
+            return name
+        path = self.get("job.mesh.path", "?")
+        return os.path.splitext(os.path.basename(path))[0]
+
+    @property
+    def triangles(self):
+        return self.num("job.mesh.triangles")
+
+    @property
+    def status(self):
+        return self.get("status", "error")
+
+    @property
+    def ok(self):
+        return self.status == OK
+
+    @property
+    def message(self):
+        return self.get("message", "") or ""
+
+    # --- measurements (None when absent) --------------------------------------------------
+    @property
+    def qps(self):
+        v = self.num("queries.throughput_qps.median")
+        return v if v and v > 0 else None
+
+    @property
+    def n_queries(self):
+        return self.num("queries.n") or self.num("job.queries.n")
+
+    @property
+    def build_seconds(self):
+        return self.num("build.seconds")
+
+    @property
+    def structure_bytes(self):
+        return self.num("build.structure_bytes") or self.num("memory.structure_bytes")
+
+    @property
+    def peak_rss_bytes(self):
+        return self.num("memory.peak_rss_bytes") or self.num("build.peak_rss_bytes")
+
+    @property
+    def file_bytes(self):
+        return self.num("structure.file_bytes")
+
+    @property
+    def has_accuracy(self):
+        return isinstance(self.get("accuracy"), dict)
+
+    def is_stress(self):
+        """Does the job itself say its mesh is a stress case?"""
+        for path in ("job.mesh.stress", "job.mesh.tags", "job.mesh.family", "job.mesh.category",
+                     "job.tags", "job.mesh.kind"):
+            v = self.get(path)
+            if v is True:
+                return True
+            if isinstance(v, str) and re.search(r"stress|stability", v, re.I):
+                return True
+            if isinstance(v, list) and any(re.search(r"stress|stability", str(t), re.I)
+                                           for t in v):
+                return True
+        return bool(STRESS_NAME_RE.search(self.mesh))
+
+
+class ResultSet:
+    """All jobs of one suite run, plus what could not be read."""
+
+    def __init__(self, root, jobs, unreadable, summary_only):
+        self.root = root
+        self.name = os.path.basename(os.path.normpath(root))
+        self.jobs = jobs
+        self.unreadable = unreadable          # [(file, reason)]
+        self.summary_only = summary_only      # job ids in summary.csv with no JSON
+        self.stress_meshes = self._find_stress_meshes()
+
+    # --- views ---------------------------------------------------------------------------
+    @property
+    def ok_jobs(self):
+        return [j for j in self.jobs if j.ok]
+
+    @property
+    def failed_jobs(self):
+        return [j for j in self.jobs if not j.ok]
+
+    def model_jobs(self):
+        """Jobs on regular models (not stress cases): what the scaling charts and tables use."""
+        return [j for j in self.jobs if j.mesh not in self.stress_meshes]
+
+    def meshes(self, jobs=None):
+        """Mesh names sorted by triangle count."""
+        sizes = OrderedDict()
+        for j in (self.jobs if jobs is None else jobs):
+            if j.mesh not in sizes or (sizes[j.mesh] is None and j.triangles):
+                sizes[j.mesh] = j.triangles
+        return sorted(sizes, key=lambda m: (sizes[m] or 0, m))
+
+    def mesh_triangles(self, mesh):
+        for j in self.jobs:
+            if j.mesh == mesh and j.triangles:
+                return j.triangles
+        return None
+
+    def is_stability_suite(self):
+        return bool(self.stress_meshes)
+
+    def _find_stress_meshes(self):
+        meshes = self.meshes()
+        if "stability" in self.name.lower() or "stress" in self.name.lower():
+            return set(meshes)
+        stress = {j.mesh for j in self.jobs if j.is_stress()}
+        # A suite where many meshes end in non-ok statuses (other than 'unsupported')
+        # is a stress suite too, whatever its meshes are called.
+        bad = {j.mesh for j in self.jobs if j.status not in (OK, "unsupported")}
+        if len(meshes) >= 3 and len(bad) >= max(3, len(meshes) // 2):
+            return set(meshes)
+        return stress
+
+    def contexts(self):
+        """Distinct (machine, run) contexts, most common first, with their job counts."""
+        counts = OrderedDict()
+        for j in self.jobs:
+            ctx = j.get("context", {}) or {}
+            key = tuple(str(ctx.get(k, "")) for k in CONTEXT_KEYS)
+            counts[key] = counts.get(key, 0) + 1
+        out = [dict(zip(CONTEXT_KEYS, k), jobs=n) for k, n in counts.items()]
+        return sorted(out, key=lambda c: -c["jobs"])
+
+
+CONTEXT_KEYS = ("host", "cpu_model", "cores", "date", "git_commit", "git_dirty", "compiler",
+                "build_type", "bvhbench_version")
+
+
+def load(root):
+    """Read results/NAME. Raises ReportError when there is nothing to report on."""
+    if not os.path.isdir(root):
+        raise ReportError(f"{root}: no such result directory")
+    runs = os.path.join(root, "runs")
+    if not os.path.isdir(runs):
+        raise ReportError(f"{runs}: missing; expected one JSON file per job "
+                          "(written by `bvhbench suite`)")
+    files = sorted(f for f in os.listdir(runs) if f.endswith(".json"))
+    jobs, unreadable = [], []
+    for f in files:
+        path = os.path.join(runs, f)
+        try:
+            with open(path, encoding="utf-8") as fh:
+                raw = json.load(fh)
+            if not isinstance(raw, dict):
+                raise ValueError("top level is not an object")
+        except (OSError, ValueError) as e:
+            unreadable.append((f, str(e)))
+            print(f"warning: {path}: unreadable result file: {e}", file=sys.stderr)
+            continue
+        schema = str(raw.get("schema", ""))
+        if schema and not schema.startswith("bvhbench.result/1"):
+            print(f"warning: {path}: schema {schema!r}, expected bvhbench.result/1",
+                  file=sys.stderr)
+        jobs.append(Job(raw, path))
+    if not jobs:
+        why = "contains no result files" if not files else "contains no readable result files"
+        raise ReportError(f"{runs}: {why}; run a suite first (e.g. `make bench`)")
+    known = {j.id for j in jobs}
+    summary_only = [jid for jid in _summary_ids(os.path.join(root, "summary.csv"))
+                    if jid not in known]
+    return ResultSet(root, jobs, unreadable, summary_only)
+
+
+def _summary_ids(path):
+    if not os.path.isfile(path):
+        return []
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            return [row.get("job_id", "") for row in csv.DictReader(fh) if row.get("job_id")]
+    except (OSError, csv.Error) as e:
+        print(f"warning: {path}: {e}", file=sys.stderr)
+        return []
+
+
+def representative_configs(jobs):
+    """method -> the one configuration that stands for it in scaling charts and tables.
+
+    The default configuration (empty params_key) when the suite ran it; otherwise the
+    configuration run on the most models, ties broken by the higher median throughput.
+    """
+    by_method = {}
+    for j in jobs:
+        by_method.setdefault(j.method, {}).setdefault(j.params_key, []).append(j)
+    chosen = {}
+    for method, configs in by_method.items():
+        if "" in configs:
+            chosen[method] = ""
+            continue
+
+        def score(item):
+            key, js = item
+            qps = [j.qps for j in js if j.ok and j.qps]
+            med = sorted(qps)[len(qps) // 2] if qps else 0.0
+            return (len({j.mesh for j in js if j.ok}), med, key)
+
+        chosen[method] = max(configs.items(), key=score)[0]
+    return chosen

@@ -1,0 +1,365 @@
+"""Tables of the report: run context, the paper's tables, non-ok jobs, accuracy warnings and
+the stability matrix. Each table is built once as (header, rows) and rendered to Markdown,
+LaTeX or CSV by the `render_*` functions, so the formats never disagree.
+"""
+import csv
+import io
+
+import fmt
+from metrics import METRICS
+from results_io import representative_configs
+from style import STATUS_SEVERITY, method_sort_key
+
+# Accuracy tolerances of the "Accuracy warnings" section.
+DIST_REL_ERR_TOL = 1e-5      # distance error above 1e-5 of the mesh diagonal is a wrong answer
+INSIDE_FAR_WRONG_TOL = 0     # any wrong inside answer far from the surface is a wrong answer
+
+# The figures published by Aguilera, Melero & Feito, CAD 77 (2016), measured on 2015 hardware.
+PAPER_REFERENCE = {
+    "citation": "Aguilera, Melero, Feito: Out-of-core real-time haptic interaction on very "
+                "large models, Computer-Aided Design 77 (2016) 98-106",
+    "polygons": "25M-30M",
+    "levels": "11",
+    "pis_random_hz": 2.5e3,
+    "pis_haptic_hz": 32e3,
+    "dist_haptic_hz": 1e6,
+}
+STAR = "ebp_octree"
+
+
+# ---------------------------------------------------------------------------------------------
+# Rendering
+# ---------------------------------------------------------------------------------------------
+def _md_cell(x):
+    return str(x).replace("|", "\\|").replace("\n", " ")
+
+
+def render_md(header, rows):
+    lines = ["| " + " | ".join(_md_cell(h) for h in header) + " |",
+             "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+_TEX_ESCAPES = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
+                "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
+                "^": r"\textasciicircum{}", "×": r"$\times$", "µ": r"$\mu$", "–": "--",
+                "≥": r"$\geq$", "÷": r"$\div$", "★": r"$\star$"}
+
+
+def tex_escape(s):
+    return "".join(_TEX_ESCAPES.get(ch, ch) for ch in str(s))
+
+
+def render_tex(header, rows, caption, label, bold_rows=()):
+    """A booktabs table (needs \\usepackage{booktabs}); bold_rows are row indices to embolden."""
+    out = [r"\begin{table}[htbp]", r"\centering", r"\footnotesize",
+           r"\begin{tabular}{" + "l" * 2 + "r" * (len(header) - 2) + "}", r"\toprule",
+           " & ".join(tex_escape(h) for h in header) + r" \\", r"\midrule"]
+    for i, r in enumerate(rows):
+        cells = [tex_escape(c) for c in r]
+        if i in bold_rows:
+            cells = [r"\textbf{" + c + "}" if c else c for c in cells]
+        out.append(" & ".join(cells) + r" \\")
+    out += [r"\bottomrule", r"\end{tabular}", r"\caption{" + tex_escape(caption) + "}",
+            r"\label{" + label + "}", r"\end{table}"]
+    return "\n".join(out) + "\n"
+
+
+def render_csv(header, rows):
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+# ---------------------------------------------------------------------------------------------
+# Context: which machine, which run
+# ---------------------------------------------------------------------------------------------
+def context_line(rs):
+    """One line naming the machine(s) and run(s) behind the results."""
+    parts = []
+    for c in rs.contexts():
+        commit = (c["git_commit"] or "?")[:10]
+        dirty = c["git_dirty"].lower() == "true"
+        cores = c["cores"] or "?"
+        s = (f"machine {c['host'] or '?'} ({c['cpu_model'] or 'unknown CPU'}, {cores} cores); "
+             f"run {c['date'] or '?'}, commit {commit}{' (dirty)' if dirty else ''}")
+        if c["compiler"] or c["build_type"]:
+            s += f", {c['compiler']} {c['build_type']}".rstrip()
+        if len(rs.contexts()) > 1:
+            s += f" [{c['jobs']} jobs]"
+        parts.append(s)
+    return f"Suite `{rs.name}`: " + "; ".join(parts) + "."
+
+
+def context_table(rs):
+    header = ["host", "CPU", "cores", "date", "git commit", "dirty", "compiler", "build type",
+              "bvhbench", "jobs"]
+    rows = [[c["host"], c["cpu_model"], c["cores"], c["date"], c["git_commit"], c["git_dirty"],
+             c["compiler"], c["build_type"], c["bvhbench_version"], c["jobs"]]
+            for c in rs.contexts()]
+    return header, rows
+
+
+# ---------------------------------------------------------------------------------------------
+# The paper's tables
+# ---------------------------------------------------------------------------------------------
+def _pick(jobs, query, kind):
+    """Median throughput of the ok jobs matching (query, kind); None if none."""
+    v = sorted(j.qps for j in jobs if j.ok and j.qps and j.query == query and j.kind == kind)
+    return v[len(v) // 2] if v else None
+
+
+def _median(vals):
+    v = sorted(x for x in vals if x is not None)
+    return v[len(v) // 2] if v else None
+
+
+def _status_note(jobs, query, kind):
+    """'timeout' etc. when the only jobs for this cell failed."""
+    st = sorted({j.status for j in jobs if j.query == query and j.kind == kind and not j.ok})
+    return "/".join(st) if st else None
+
+
+def paper_rows(rs):
+    """Per model and method: the figures of the paper's tables, as numbers (None = absent)."""
+    jobs = rs.model_jobs()
+    reps = representative_configs(jobs)
+    out = []
+    for mesh in rs.meshes(jobs):
+        on_mesh = [j for j in jobs if j.mesh == mesh]
+        for method in sorted({j.method for j in on_mesh}, key=method_sort_key):
+            js = [j for j in on_mesh if j.method == method and j.params_key == reps.get(method)]
+            if not js:
+                continue
+            ok = [j for j in js if j.ok]
+            levels = next((j.get("structure.levels") for j in ok
+                           if j.get("structure.levels") is not None), None)
+            if levels is None:
+                levels = next((j.get("structure.max_depth") for j in ok
+                               if j.get("structure.max_depth") is not None), None)
+            row = {
+                "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
+                "config": js[0].config, "levels": levels,
+                "build_s": _median(j.build_seconds for j in ok),
+                "structure_bytes": _median(j.structure_bytes for j in ok),
+                "file_bytes": _median(j.file_bytes for j in ok),
+                "pis_random": _pick(js, "inside", "random"),
+                "pis_haptic": _pick(js, "inside", "haptic"),
+                "dist_haptic": _pick(js, "distance", "haptic"),
+                "notes": {k: _status_note(js, q, kd) for k, q, kd in
+                          [("pis_random", "inside", "random"), ("pis_haptic", "inside", "haptic"),
+                           ("dist_haptic", "distance", "haptic")]},
+            }
+            out.append(row)
+    return out
+
+
+def _rate_cell(row, key):
+    v = row[key]
+    if v is not None:
+        return fmt.hz(v)
+    return row["notes"].get(key) or "–"
+
+
+def _ratio(a, b):
+    return a / b if a and b else None
+
+
+def paper_tables(rs):
+    """(main, ratios): two (header, rows, bold_row_indices) tables."""
+    rows = paper_rows(rs)
+    main_h = ["Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
+              "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
+    main, bold = [], []
+    for r in rows:
+        if r["method"] == STAR:
+            bold.append(len(main))
+        main.append([r["mesh"], fmt.count(r["triangles"]), r["config"],
+                     r["levels"] if r["levels"] is not None else "–",
+                     fmt.seconds(r["build_s"]), fmt.nbytes(r["structure_bytes"]),
+                     fmt.nbytes(r["file_bytes"]), _rate_cell(r, "pis_random"),
+                     _rate_cell(r, "pis_haptic"), _rate_cell(r, "dist_haptic")])
+    p = PAPER_REFERENCE
+    main.append(["Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
+                 p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
+                 fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
+
+    ratio_h = ["Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
+               "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
+    ratios = []
+    by_mesh = {}
+    for r in rows:
+        by_mesh.setdefault(r["mesh"], []).append(r)
+    for mesh, rs_ in by_mesh.items():
+        star = next((r for r in rs_ if r["method"] == STAR), None)
+        if star is None:
+            continue
+        for r in rs_:
+            if r is star:
+                continue
+            ratios.append([mesh, fmt.count(r["triangles"]), r["config"],
+                           fmt.ratio(_ratio(star["pis_random"], r["pis_random"])),
+                           fmt.ratio(_ratio(star["pis_haptic"], r["pis_haptic"])),
+                           fmt.ratio(_ratio(star["dist_haptic"], r["dist_haptic"])),
+                           fmt.ratio(_ratio(r["build_s"], star["build_s"])),
+                           fmt.ratio(_ratio(r["structure_bytes"], star["structure_bytes"]))])
+    return (main_h, main, bold), (ratio_h, ratios, [])
+
+
+def paper_notes(rs):
+    reps = representative_configs(rs.model_jobs())
+    swept = sorted(m for m in reps if len({j.params_key for j in rs.model_jobs()
+                                          if j.method == m}) > 1)
+    note = ("Rates are median queries per second over repetitions, single thread. "
+            "PiS = point-in-solid (`inside`). Ratios above 1× favour the EBP-Octree: "
+            "rates are EBP/peer, build time and memory are peer/EBP. "
+            "A status instead of a rate means that job did not finish ok (see the non-ok table). "
+            "Published figures: " + PAPER_REFERENCE["citation"] + ": 2.5 kHz random and 32 kHz "
+            "haptic-path point-in-solid, about 1 MHz distance on haptic paths over models of "
+            "25M+ polygons, on 2015 hardware; they are cited for reference, not measured here.")
+    if swept:
+        note += (" Methods with a parameter sweep are shown in one configuration: the default "
+                 "when it was run, else the one run on most models (" +
+                 ", ".join(f"{m}: `{reps[m] or 'defaults'}`" for m in swept) + ").")
+    return note
+
+
+# ---------------------------------------------------------------------------------------------
+# Non-ok jobs and accuracy warnings
+# ---------------------------------------------------------------------------------------------
+def failed_table(rs):
+    header = ["Status", "Method", "Mesh", "Query", "Path", "Message", "Job"]
+    rows = [[j.status, j.config, j.mesh, j.query, j.kind, j.message or "(no message)", j.id]
+            for j in sorted(rs.failed_jobs, key=lambda j: (j.status, method_sort_key(j.method),
+                                                           j.mesh, j.query, j.kind))]
+    return header, rows
+
+
+def accuracy_problems(job):
+    """Human-readable reasons why an ok job's answers are wrong (empty list: none)."""
+    if not job.ok or not job.has_accuracy:
+        return []
+    out = []
+    far = job.num("accuracy.inside.wrong_far")
+    if far is not None and far > INSIDE_FAR_WRONG_TOL:
+        rate = METRICS["inside_wrong_rate_far"].getter(job)
+        out.append(f"{int(far)} wrong inside answers far from the surface"
+                   + (f" (rate {fmt.sci(rate)})" if rate is not None else ""))
+    elif far is None:
+        wrong = job.num("accuracy.inside.wrong")
+        near = job.num("accuracy.inside.wrong_near_surface") or 0
+        if wrong is not None and wrong - near > INSIDE_FAR_WRONG_TOL:
+            out.append(f"{int(wrong)} wrong inside answers ({int(near)} near the surface)")
+    rel = job.num("accuracy.distance.rel_error.max")
+    if rel is not None and rel > DIST_REL_ERR_TOL:
+        out.append(f"distance error up to {fmt.sci(rel)} of the diagonal "
+                   f"(p99 {fmt.sci(job.num('accuracy.distance.rel_error.p99'))}, "
+                   f"tolerance {DIST_REL_ERR_TOL:g})")
+    sign = job.num("accuracy.distance.sign_wrong")
+    if sign:
+        out.append(f"{int(sign)} distances with the wrong sign")
+    return out
+
+
+def accuracy_warnings(rs):
+    header = ["Method", "Mesh", "Query", "Path", "Problem", "Job"]
+    rows = []
+    for j in sorted(rs.ok_jobs, key=lambda j: (method_sort_key(j.method), j.params_key, j.mesh,
+                                               j.query, j.kind)):
+        probs = accuracy_problems(j)
+        if probs:
+            rows.append([j.config, j.mesh, j.query, j.kind, "; ".join(probs), j.id])
+    unchecked = [j for j in rs.ok_jobs if not j.has_accuracy]
+    return header, rows, unchecked
+
+
+# ---------------------------------------------------------------------------------------------
+# Stability matrix
+# ---------------------------------------------------------------------------------------------
+def _cell_status(job):
+    if not job.ok:
+        return job.status if job.status in STATUS_SEVERITY else "error"
+    if not job.has_accuracy:
+        return "unchecked"
+    return "ok_wrong" if accuracy_problems(job) else "ok"
+
+
+def _worst(statuses):
+    return max(statuses, key=STATUS_SEVERITY.index) if statuses else "missing"
+
+
+def stability_cells(rs):
+    """{query: (configs, meshes, {(config, mesh): cell})} over the stress meshes.
+
+    A cell merges every job of that method configuration on that mesh and query (all paths):
+    status is the worst one; 'inside_rate' the worst wrong-answer rate, 'dist_err' the worst
+    max relative distance error among ok jobs.
+    """
+    stress = [j for j in rs.jobs if j.mesh in rs.stress_meshes]
+    out = {}
+    for query in sorted({j.query for j in stress}):
+        js = [j for j in stress if j.query == query]
+        configs = sorted({j.config for j in js},
+                         key=lambda c: (method_sort_key(c.split(":")[0]), c))
+        meshes = sorted({j.mesh for j in js})
+        cells = {}
+        for c in configs:
+            for m in meshes:
+                cj = [j for j in js if j.config == c and j.mesh == m]
+                rates = [METRICS["inside_wrong_rate"].getter(j) for j in cj if j.ok]
+                errs = [METRICS["dist_rel_err_max"].getter(j) for j in cj if j.ok]
+                rates = [r for r in rates if r is not None]
+                errs = [e for e in errs if e is not None]
+                cells[(c, m)] = {
+                    "status": _worst([_cell_status(j) for j in cj]),
+                    "inside_rate": max(rates) if rates else None,
+                    "dist_err": max(errs) if errs else None,
+                    "messages": sorted({j.message for j in cj if not j.ok and j.message}),
+                    "jobs": len(cj),
+                }
+        out[query] = (configs, meshes, cells)
+    return out
+
+
+def cell_text(query, cell):
+    """Short annotation of a stability cell: the error for ok cells, the status otherwise."""
+    st = cell["status"]
+    if st in ("ok", "ok_wrong"):
+        v = cell["inside_rate"] if query == "inside" else cell["dist_err"]
+        return fmt.sci(v, 1) if v is not None else "ok"
+    short = {"unsupported": "n/a", "rejected_input": "rejected", "unchecked": "ok?",
+             "missing": "", "timeout": "timeout", "crash": "CRASH", "oom": "OOM",
+             "error": "error"}
+    return short.get(st, st)
+
+
+def stability_table(rs):
+    """Flat table: one row per (query, config, stress mesh)."""
+    header = ["query", "method", "mesh", "status", "inside_wrong_rate", "dist_rel_err_max",
+              "message"]
+    rows = []
+    for query, (configs, meshes, cells) in stability_cells(rs).items():
+        for c in configs:
+            for m in meshes:
+                cell = cells[(c, m)]
+                if cell["jobs"] == 0:
+                    continue
+                rows.append([query, c, m, cell["status"], fmt.sci(cell["inside_rate"]),
+                             fmt.sci(cell["dist_err"]), "; ".join(cell["messages"])])
+    return header, rows
+
+
+def stability_matrix_md(rs):
+    """The matrix itself as Markdown: one table per query, configs × stress meshes."""
+    parts = []
+    for query, (configs, meshes, cells) in stability_cells(rs).items():
+        header = [f"{query} \\ mesh"] + meshes
+        rows = [[c] + [f"{cells[(c, m)]['status']}: {cell_text(query, cells[(c, m)])}"
+                       if cells[(c, m)]["status"] in ("ok", "ok_wrong")
+                       else cell_text(query, cells[(c, m)]) for m in meshes]
+                for c in configs]
+        parts.append(render_md(header, rows))
+    return "\n".join(parts)
