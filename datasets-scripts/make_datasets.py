@@ -1,0 +1,233 @@
+#!/usr/bin/env python3
+"""Makes the benchmark meshes of a preset and their manifest.
+
+    python datasets-scripts/make_datasets.py --preset ci [--out DIR] [--force]
+
+Writes DIR/<mesh>.ply (binary little-endian; float32 xyz, or float64 where the manifest says
+coordinate_type float64; int32 triangle indices) and DIR/manifest.json (default DIR:
+data/<preset>/ at the repo root, git-ignored). Real models are read from ../shared/meshes
+relative to the repo root (override: BVHBENCH_SHARED_MESHES or --shared-meshes).
+
+Re-running is cheap: a mesh whose file still has the manifest's sha256 and whose family and
+parameters have not changed is skipped (--force redoes it). Same parameters, same bytes.
+"""
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+from bvhdata import meshops, progress  # noqa: E402
+from bvhdata.families import FAMILIES, Context  # noqa: E402
+from bvhdata.ply import file_sha256, write_ply  # noqa: E402
+from bvhdata.presets import PRESETS  # noqa: E402
+from bvhdata.progress import log  # noqa: E402
+
+REPO_ROOT = os.path.dirname(HERE)
+MANIFEST_VERSION = 1
+
+
+def default_shared_meshes() -> str:
+    return os.environ.get("BVHBENCH_SHARED_MESHES",
+                          os.path.join(os.path.dirname(REPO_ROOT), "shared", "meshes"))
+
+
+def _atomic_json(path: str, obj) -> None:
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1, sort_keys=False)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
+def _jsonable(x):
+    """Numpy scalars and tuples to plain JSON values."""
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if hasattr(x, "item"):
+        return x.item()
+    return x
+
+
+class VerificationError(RuntimeError):
+    pass
+
+
+def verify(name: str, fam, stats: dict, check: dict) -> None:
+    """Closed families must come out watertight and consistently oriented (and, outside the
+    stress cases, outward: positive volume); trimesh confirms it up to 2M triangles."""
+    if not fam.closed:
+        return
+    problems = []
+    if not stats["closed"]:
+        problems.append(f"not watertight ({stats['boundary_edges']} boundary, "
+                        f"{stats['nonmanifold_edges']} non-manifold edges)")
+    if not stats["winding_consistent"]:
+        problems.append("winding not consistent")
+    if fam.kind != "stress" and not stats["volume"] > 0:
+        problems.append(f"volume {stats['volume']} not positive")
+    if check:
+        if not (check["is_watertight"] and check["is_winding_consistent"]):
+            problems.append(f"trimesh disagrees: {check}")
+        if fam.kind != "stress" and not check["volume"] > 0:
+            problems.append(f"trimesh volume {check['volume']} not positive")
+    if problems:
+        raise VerificationError(f"{name}: " + "; ".join(problems))
+
+
+def make_mesh(ctx: Context, out_dir: str, name: str, family: str, params: dict) -> dict:
+    fam = FAMILIES[family]
+    full = {**fam.defaults, **params}
+    unknown = set(params) - set(fam.defaults)
+    if unknown:
+        raise ValueError(f"{name}: unknown parameters {sorted(unknown)} for family {family}")
+    g = ctx.build(family, **params)
+    log(f"{name}: {len(g.faces):,} triangles, computing statistics")
+    # Statistics and checks are made on the coordinates as stored in the file.
+    stored = g.vertices.astype(np.float32).astype(np.float64) if g.coord == "float32" else g.vertices
+    stats = meshops.mesh_stats(stored, g.faces)
+    check = meshops.trimesh_check(stored, g.faces) if fam.closed else {}
+    del stored
+    verify(name, fam, stats, check)
+    path = os.path.join(out_dir, name + ".ply")
+    log(f"{name}: writing {os.path.basename(path)}")
+    sha, size = write_ply(path, g.vertices, g.faces, coord=g.coord,
+                          progress=progress.Bar(f"{name}: writing"))
+    source = g.source if g.source == "procedural" else f"../shared/meshes/{g.source}"
+    entry = {
+        "name": name,
+        "file": os.path.basename(path),
+        "sha256": sha,
+        "bytes": size,
+        "family": family,
+        "kind": fam.kind,
+        "description": fam.description,
+        "triangles": stats["triangles"],
+        "vertices": stats["vertices"],
+        "closed": stats["closed"],
+        "winding_consistent": stats["winding_consistent"],
+        "volume": stats["volume"],
+        "euler_characteristic": stats["euler_characteristic"],
+        "boundary_edges": stats["boundary_edges"],
+        "nonmanifold_edges": stats["nonmanifold_edges"],
+        "bbox": stats["bbox"],
+        "average_edge_length": stats["average_edge_length"],
+        "coordinate_type": g.coord,
+        "provenance": {
+            "source": source,
+            "family": family,
+            "operations": g.operations,
+            "parameters": full,
+            "seed": full.get("seed"),
+        },
+    }
+    if check:
+        entry["trimesh_check"] = check
+    if g.expect:
+        entry["expect"] = g.expect
+    return _jsonable(entry)
+
+
+def up_to_date(entry: dict | None, out_dir: str, family: str, full_params: dict) -> bool:
+    if not entry:
+        return False
+    prov = entry.get("provenance", {})
+    if prov.get("family") != family or prov.get("parameters") != _jsonable(full_params):
+        return False
+    path = os.path.join(out_dir, entry["file"])
+    return os.path.exists(path) and file_sha256(path) == entry["sha256"]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--preset", choices=sorted(PRESETS), help="which meshes to make")
+    ap.add_argument("--out", help="output folder (default: data/<preset>/ at the repo root)")
+    ap.add_argument("--force", action="store_true", help="remake meshes that are up to date")
+    ap.add_argument("--only", nargs="*", help="only these mesh names of the preset")
+    ap.add_argument("--shared-meshes", default=None,
+                    help="folder of the real models (default: $BVHBENCH_SHARED_MESHES or "
+                         "../shared/meshes from the repo root)")
+    ap.add_argument("--list", action="store_true", help="list presets, meshes and families")
+    ap.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    args = ap.parse_args(argv)
+    progress.quiet = args.quiet
+
+    if args.list:
+        for fname, fam in FAMILIES.items():
+            print(f"family {fname:28s} {fam.kind:10s} {fam.description}  {fam.defaults}")
+        for pname, specs in PRESETS.items():
+            print(f"preset {pname}: " + ", ".join(n for n, _, _ in specs))
+        return 0
+    if not args.preset:
+        ap.error("--preset is required")
+
+    shared = args.shared_meshes or default_shared_meshes()
+    out_dir = os.path.abspath(args.out or os.path.join(REPO_ROOT, "data", args.preset))
+    os.makedirs(out_dir, exist_ok=True)
+    manifest_path = os.path.join(out_dir, "manifest.json")
+    old = {}
+    if os.path.exists(manifest_path) and not args.force:
+        try:
+            with open(manifest_path) as f:
+                old = {m["name"]: m for m in json.load(f).get("meshes", [])}
+        except (OSError, ValueError, KeyError):
+            old = {}
+
+    specs = PRESETS[args.preset]
+    if args.only:
+        missing = set(args.only) - {n for n, _, _ in specs}
+        if missing:
+            ap.error(f"not in preset {args.preset}: {sorted(missing)}")
+    ctx = Context(shared)
+    manifest = {
+        "manifest_version": MANIFEST_VERSION,
+        "preset": args.preset,
+        "generator": "datasets-scripts/make_datasets.py",
+        "format": "PLY binary_little_endian; vertex x,y,z as coordinate_type (float32 unless "
+                  "noted); face: list uchar int vertex_indices, triangles",
+        "meshes": [],
+    }
+    t_all = time.monotonic()
+    made = skipped = 0
+    for name, family, params in specs:
+        fam = FAMILIES[family]
+        full = {**fam.defaults, **params}
+        if args.only and name not in args.only:
+            if name in old:
+                manifest["meshes"].append(old[name])
+            continue
+        if not args.force and up_to_date(old.get(name), out_dir, family, full):
+            log(f"{name}: up to date, skipped")
+            manifest["meshes"].append(old[name])
+            skipped += 1
+            continue
+        t0 = time.monotonic()
+        entry = make_mesh(ctx, out_dir, name, family, params)
+        manifest["meshes"].append(entry)
+        made += 1
+        log(f"{name}: done in {time.monotonic() - t0:.1f}s ({entry['triangles']:,} triangles, "
+            f"closed={entry['closed']})")
+        _atomic_json(manifest_path, manifest)
+        gc.collect()
+    _atomic_json(manifest_path, manifest)
+    log(f"preset {args.preset}: {made} made, {skipped} up to date, "
+        f"{time.monotonic() - t_all:.1f}s -> {manifest_path}")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except (VerificationError, FileNotFoundError, ValueError) as e:
+        print(f"make_datasets: error: {e}", file=sys.stderr)
+        sys.exit(2)
