@@ -51,17 +51,33 @@ def _grid(n, max_cols=3, panel=FIGSIZE_PANEL, legend_width=2.3):
     return fig, flat[:n]
 
 
-def _finish(fig, handles, legend_title=None, note=None):
+def _finish(fig, handles, legend_title=None, note=None, legend_width=2.3):
     """Legend outside the axes, on the right, so it never hides a point."""
-    fig.tight_layout(rect=(0, 0.04 if note else 0, 1, 1))
+    right = 1 - legend_width / fig.get_figwidth() if handles else 1
+    fig.tight_layout(rect=(0, 0.04 if note else 0, right, 1))
     if handles:
-        fig.subplots_adjust(right=1 - 2.3 / fig.get_figwidth())
         fig.legend(handles=handles, loc="center left", title=legend_title, fontsize=8,
-                   title_fontsize=8, bbox_to_anchor=(1 - 2.25 / fig.get_figwidth(), 0.5),
-                   frameon=False)
+                   title_fontsize=8, bbox_to_anchor=(right + 0.005, 0.5), frameon=False)
     if note:
         fig.text(0.01, 0.01, note, fontsize=7, color="#444444", ha="left", va="bottom")
     return fig
+
+
+def _log_ticks(ax, axis="y", formatter=None):
+    """Log axis ticks that stay readable: 1-2-5 labels when the axis spans under 2 decades."""
+    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
+    if lo <= 0 or hi <= 0:
+        return
+    a = ax.yaxis if axis == "y" else ax.xaxis
+    if math.log10(hi / lo) < 0.9:  # not even one full decade: widen it around the data
+        mid = math.sqrt(lo * hi)
+        lo, hi = mid / 4, mid * 4
+        (ax.set_ylim if axis == "y" else ax.set_xlim)(lo, hi)
+    subs = (1.0, 2.0, 5.0) if math.log10(hi / lo) < 2.2 else (1.0,)
+    a.set_major_locator(LogLocator(base=10, subs=subs, numticks=12))
+    a.set_minor_formatter(NullFormatter())
+    if formatter is not None:
+        a.set_major_formatter(formatter)
 
 
 def _method_handle(method, label=None, line=True):
@@ -146,9 +162,8 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         ax.set_xlabel(axis_label(xm), fontsize=8)
         ax.set_ylabel(axis_label(ym), fontsize=8)
         ax.tick_params(labelsize=7)
-        if ym.unit == "queries/s":
-            ax.yaxis.set_major_formatter(_si_formatter("q/s"))
-            ax.yaxis.set_minor_formatter(NullFormatter())
+        if ym.log:
+            _log_ticks(ax, "y", _si_formatter("q/s") if ym.unit == "queries/s" else None)
         better_x = "left" if xm.better == "lower" else "right"
         better_y = "top" if ym.better == "higher" else "bottom"
         ax.text(0.02 if better_x == "left" else 0.98, 0.97 if better_y == "top" else 0.03,
@@ -251,8 +266,7 @@ def throughput_vs_size(rs):
         ax.set_yscale("log")
         lo, hi = ax.get_ylim()
         ax.set_ylim(min(lo, HAPTIC_RATE_HZ / 3), max(hi, HAPTIC_RATE_HZ * 3))
-        ax.yaxis.set_major_formatter(_si_formatter("q/s"))
-        ax.yaxis.set_minor_formatter(NullFormatter())
+        _log_ticks(ax, "y", _si_formatter("q/s"))
         ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
         ax.set_title(f"{query} · {kind} path", fontsize=9)
     handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
@@ -292,8 +306,8 @@ def memory_vs_size(rs):
     for ax in axes:
         _size_axis(ax)
         ax.set_yscale("log")
-    axes[1].yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt.nbytes(v)))
-    axes[1].yaxis.set_minor_formatter(NullFormatter())
+    _log_ticks(axes[0], "y", FuncFormatter(lambda v, _: f"{v:g}"))
+    _log_ticks(axes[1], "y", FuncFormatter(lambda v, _: fmt.nbytes(v)))
     handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
     if mesh_pts:
         handles.append(Line2D([], [], color="black", linestyle=":", label="the mesh itself"))
@@ -313,8 +327,7 @@ def build_time_vs_size(rs):
             ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6)
     _size_axis(ax)
     ax.set_yscale("log")
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: fmt.seconds(v)))
-    ax.yaxis.set_minor_formatter(NullFormatter())
+    _log_ticks(ax, "y", FuncFormatter(lambda v, _: fmt.seconds(v)))
     ax.set_ylabel("Build time [s]\n(\u2190 lower is better)", fontsize=8)
     ax.set_title("Build time (median over the model's jobs)", fontsize=9)
     return _finish(fig, [_method_handle(m, _legend_label(m, reps)) for m in methods], "method")
@@ -342,7 +355,8 @@ def latency_haptic(rs):
     per_q = {}
     panels = [p for p in panels if per_q.setdefault(p[0], []).append(p) or
               len(per_q[p[0]]) <= 3]
-    fig, axes = _grid(len(panels), max_cols=3, legend_width=0.6)
+    panels.sort(key=lambda p: (p[0] != "inside", rs.mesh_triangles(p[1]) or 0))
+    fig, axes = _grid(len(panels), max_cols=3, legend_width=0.0)
     all_n = [j.n_queries for j in jobs if j.n_queries]
     y_lo = 0.5 / max(all_n) if all_n else 1e-4
     for ax, (query, mesh) in zip(axes, panels):
@@ -378,8 +392,7 @@ def latency_haptic(rs):
         ax.set_xlim(lo / 2, max(deadline * 5, ax.get_xlim()[1]))
         ax.axvspan(deadline, ax.get_xlim()[1], color="#fde0dd", zorder=0)
         ax.set_ylim(y_lo, 1.0)
-        ax.set_yticks([1.0, 0.5, 0.1, 0.01, 0.001, 1e-4, 1e-5, 1e-6][:8])
-        ax.set_yticks([t for t in ax.get_yticks() if t >= y_lo])
+        ax.set_yticks([t for t in (0.5, 0.1, 0.01, 1e-3, 1e-4, 1e-5, 1e-6) if t >= y_lo])
         ax.yaxis.set_major_formatter(FuncFormatter(
             lambda v, _: f"{100 * v:g}%" if v >= 1e-4 else f"{100 * v:.0e}%"))
         ax.yaxis.set_minor_formatter(NullFormatter())
@@ -403,7 +416,7 @@ def stability_matrix(rs):
     if not rs.is_stability_suite():
         raise NoData("the suite has no stress meshes")
     data = tables.stability_cells(rs)
-    queries = list(data)
+    queries = sorted(data, key=lambda q: (q != "inside", q))
     n_cfg = max(len(data[q][0]) for q in queries)
     n_mesh = max(len(data[q][1]) for q in queries)
     w = max(4.0, 0.9 * n_mesh + 2.8)

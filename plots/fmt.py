@@ -28,13 +28,10 @@ def count(x):
 
 
 def nbytes(x):
-    """Binary units, as memory is usually read: '12.3 MiB'."""
+    """Decimal units, as on disk: '12.3 MB'."""
     if x is None:
         return "–"
-    for scale, unit in [(2 ** 40, "TiB"), (2 ** 30, "GiB"), (2 ** 20, "MiB"), (2 ** 10, "KiB")]:
-        if abs(x) >= scale:
-            return f"{x / scale:.3g} {unit}"
-    return f"{x:.0f} B"
+    return si(x, "B", 3)
 
 
 def seconds(x):

@@ -112,6 +112,13 @@ def _pick(jobs, query, kind):
     return v[len(v) // 2] if v else None
 
 
+def _inaccurate(jobs, query, kind):
+    return any(accuracy_problems(j) for j in jobs if j.query == query and j.kind == kind)
+
+
+WRONG_MARK = "(!)"   # beside a rate whose answers were wrong; explained under the table
+
+
 def _median(vals):
     v = sorted(x for x in vals if x is not None)
     return v[len(v) // 2] if v else None
@@ -121,6 +128,10 @@ def _status_note(jobs, query, kind):
     """'timeout' etc. when the only jobs for this cell failed."""
     st = sorted({j.status for j in jobs if j.query == query and j.kind == kind and not j.ok})
     return "/".join(st) if st else None
+
+
+RATE_COLUMNS = [("pis_random", "inside", "random"), ("pis_haptic", "inside", "haptic"),
+                ("dist_haptic", "distance", "haptic")]
 
 
 def paper_rows(rs):
@@ -149,9 +160,8 @@ def paper_rows(rs):
                 "pis_random": _pick(js, "inside", "random"),
                 "pis_haptic": _pick(js, "inside", "haptic"),
                 "dist_haptic": _pick(js, "distance", "haptic"),
-                "notes": {k: _status_note(js, q, kd) for k, q, kd in
-                          [("pis_random", "inside", "random"), ("pis_haptic", "inside", "haptic"),
-                           ("dist_haptic", "distance", "haptic")]},
+                "notes": {k: _status_note(js, q, kd) for k, q, kd in RATE_COLUMNS},
+                "wrong": {k: _inaccurate(js, q, kd) for k, q, kd in RATE_COLUMNS},
             }
             out.append(row)
     return out
@@ -160,7 +170,7 @@ def paper_rows(rs):
 def _rate_cell(row, key):
     v = row[key]
     if v is not None:
-        return fmt.hz(v)
+        return fmt.hz(v) + (" " + WRONG_MARK if row["wrong"][key] else "")
     return row["notes"].get(key) or "–"
 
 
@@ -216,7 +226,8 @@ def paper_notes(rs):
     note = ("Rates are median queries per second over repetitions, single thread. "
             "PiS = point-in-solid (`inside`). Ratios above 1× favour the EBP-Octree: "
             "rates are EBP/peer, build time and memory are peer/EBP. "
-            "A status instead of a rate means that job did not finish ok (see the non-ok table). "
+            "A status instead of a rate means that job did not finish ok (see the non-ok table); "
+            f"{WRONG_MARK} marks a rate whose answers were wrong (see Accuracy warnings). "
             "Published figures: " + PAPER_REFERENCE["citation"] + ": 2.5 kHz random and 32 kHz "
             "haptic-path point-in-solid, about 1 MHz distance on haptic paths over models of "
             "25M+ polygons, on 2015 hardware; they are cited for reference, not measured here.")

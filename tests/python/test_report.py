@@ -1,0 +1,169 @@
+"""plots/report.py builds every chart and table from a small fixture result set.
+
+The fixture (tests/fixtures/results_small, written by its make_fixture.py) holds 5 methods on
+2 models, an EBP-Octree and an OpenVDB sweep, unsupported / crash / timeout / oom / error jobs,
+OpenVDB jobs with wrong answers, and 3 stress meshes.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+REPORT = os.path.join(ROOT, "plots", "report.py")
+FIXTURE = os.path.join(ROOT, "tests", "fixtures", "results_small")
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+
+import charts  # noqa: E402
+import metrics  # noqa: E402
+import results_io  # noqa: E402
+
+EXPECTED_CHARTS = list(charts.CHARTS)
+
+
+def run_report(results, *extra):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, REPORT, str(results), *extra], capture_output=True,
+                          text=True, env=env, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    """The fixture result set copied to a temporary folder, and its report built there."""
+    results = tmp_path_factory.mktemp("results") / "results_small"
+    shutil.copytree(FIXTURE, results, ignore=shutil.ignore_patterns("*.py"))
+    proc = run_report(results, "--strict")
+    assert proc.returncode == 0, proc.stderr
+    return results / "report"
+
+
+def read(path):
+    return path.read_text(encoding="utf-8")
+
+
+def test_every_chart_is_written_as_png_and_svg(report):
+    for name in EXPECTED_CHARTS:
+        for ext in ("png", "svg"):
+            f = report / f"{name}.{ext}"
+            assert f.is_file(), f"{f.name} missing"
+            assert f.stat().st_size > 1000, f"{f.name} is (nearly) empty"
+    assert (report / "pareto_inside_wrong_rate.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_report_md_shows_every_chart(report):
+    md = read(report / "report.md")
+    for name in EXPECTED_CHARTS:
+        assert f"]({name}.png)" in md, f"report.md does not show {name}"
+    assert "Not drawn" not in md and "failed to draw" not in md
+
+
+def test_report_states_machine_and_run(report):
+    md = read(report / "report.md")
+    assert "bench-1" in md and "E5-2680" in md and "3f9c2a1b7e" in md and "2026-11-20" in md
+    assert "bench-1" in read(report / "paper_table.md")
+    assert "bench-1" in read(report / "paper_table.tex")
+
+
+def test_paper_tables_have_ebp_row_ratios_and_published_figures(report):
+    md = read(report / "paper_table.md")
+    tex = read(report / "paper_table.tex")
+    assert "**ebp_octree**" in md
+    assert "EBP/peer" in md and "peer/EBP" in md
+    # cgal_aabb on bunny: 180 kHz / 72 kHz random point-in-solid = 2.5x for the EBP-Octree.
+    cgal_bunny = next(line for line in md.splitlines()
+                      if line.startswith("| bunny") and "cgal_aabb" in line and "×" in line)
+    assert "| 2.5× |" in cgal_bunny
+    assert "2.5 kHz" in md and "32 kHz" in md and "1 MHz" in md
+    assert "| 7 |" in md.split("**bunny**")[0] or "**7**" in md   # octree levels
+    assert r"\textbf{ebp\_octree}" in tex
+    assert r"\begin{tabular}" in tex and r"\bottomrule" in tex
+    assert "EBP/peer" in tex and r"$\times$" in tex
+    # A crashed or timed-out job shows its status, not an empty cell.
+    assert "crash" in md and "timeout" in md
+
+
+def test_non_ok_jobs_are_listed_with_messages(report):
+    md = read(report / "report.md")
+    section = md.split("## Jobs that did not finish ok")[1]
+    for status, message in [("unsupported", "capability 'distance' not provided"),
+                            ("crash", "SIGSEGV"), ("timeout", "time limit of 600 s"),
+                            ("oom", "address-space limit"), ("error", "plane fit failed")]:
+        row = next((l for l in section.splitlines() if l.startswith(f"| {status} |")), None)
+        assert row is not None, f"no {status} row"
+        assert message in row
+
+
+def test_accuracy_warnings_come_first_and_name_the_wrong_jobs(report):
+    md = read(report / "report.md")
+    assert md.index("## Accuracy warnings") < md.index("## The paper's tables")
+    warnings = md.split("## Accuracy warnings")[1].split("\n## ")[0]
+    assert "openvdb:voxel=0.01" in warnings and "far from the surface" in warnings
+    assert "distance error up to" in warnings
+    assert "stress_duplicate" in warnings            # ebp_octree wrong far on a stress case
+    assert "| cgal_aabb |" not in warnings            # exact methods are not accused
+    assert "spot_noisy__random-n10000-s1__inside__embree" in warnings   # no oracle: said so
+
+
+def test_stability_matrix_csv_and_md(report):
+    csv_text = read(report / "stability.csv")
+    assert csv_text.splitlines()[0].startswith("query,method,mesh,status")
+    assert "stress_duplicate" in csv_text and ",oom," in csv_text
+    assert "spot_noisy" in csv_text                   # stress case known by metadata only
+    assert "bunny" not in csv_text and "lucy" not in csv_text
+    assert "oom" in read(report / "stability.md")
+
+
+def test_missing_runs_dir_is_a_clear_error(tmp_path):
+    proc = run_report(tmp_path)
+    assert proc.returncode == 2
+    assert "runs" in proc.stderr and "Traceback" not in proc.stderr
+    proc = run_report(tmp_path / "nonexistent")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_empty_runs_dir_is_a_clear_error(tmp_path):
+    (tmp_path / "runs").mkdir()
+    proc = run_report(tmp_path)
+    assert proc.returncode == 2
+    assert "no result files" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_sparse_and_broken_results_do_not_break_the_report(tmp_path):
+    """Only failed jobs, a job without optional blocks, and an unreadable file."""
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (runs / "broken.json").write_text("{not json")
+    (runs / "failed.json").write_text(json.dumps({
+        "schema": "bvhbench.result/1", "status": "crash", "message": "signal 6",
+        "job": {"method": "newmethod", "query": "inside",
+                "mesh": {"name": "cow", "triangles": 5804}, "queries": {"kind": "haptic"}}}))
+    (runs / "bare.json").write_text(json.dumps({
+        "status": "ok", "accuracy": None,
+        "job": {"method": "newmethod", "query": "distance",
+                "mesh": {"name": "cow", "triangles": 5804}, "queries": {"kind": "random", "n": 10}},
+        "queries": {"throughput_qps": {"median": 1000.0}}}))
+    proc = run_report(tmp_path, "--strict")
+    assert proc.returncode == 0, proc.stderr
+    md = read(tmp_path / "report" / "report.md")
+    assert "signal 6" in md and "broken.json" in md and "Not drawn" in md
+
+
+def test_pareto_front():
+    pts = [(0.0, 10, "a"), (0.0, 20, "b"), (1e-3, 50, "c"), (1e-2, 40, "d"), (1e-1, 60, "e")]
+    front = metrics.pareto_front(pts, "lower", "higher")
+    assert [p[2] for p in front] == ["b", "c", "e"]
+
+
+def test_every_metric_declares_a_direction():
+    for m in metrics.METRICS.values():
+        assert m.better in ("higher", "lower") and m.unit
+
+
+def test_representative_config_prefers_defaults(tmp_path):
+    rs = results_io.load(FIXTURE)
+    reps = results_io.representative_configs(rs.model_jobs())
+    assert reps["ebp_octree"] == "" and reps["openvdb"] == "voxel=0.01"
+    assert rs.stress_meshes == {"stress_degenerate", "stress_duplicate", "spot_noisy"}
