@@ -146,7 +146,7 @@ json compute_accuracy(const Answers& ans, const std::string& truth_path, double 
                        {"rel_error", error_stats(rel_err)},
                        {"normal_angle_deg", error_stats(angle)},
                        {"sign_wrong", sign_wrong},
-                       {"triangle_agreement", tri_known ? double(tri_same) / double(tri_known) : json(nullptr)},
+                       {"triangle_agreement", tri_known ? json(double(tri_same) / double(tri_known)) : json(nullptr)},
                        {"triangle_compared", tri_known},
                        {"triangle_tied", tri_tied}};
   }

@@ -636,7 +636,7 @@ void add_suite_command(CLI::App& app) {
       } else {
         spec.truth_path = prepare_truth(j, npy);
         std::vector<std::string> args = {exe, "--quiet", "run", "--mesh", spec.mesh_path, "--method", spec.method_spec,
-                                         "--queries", spec.queries_path, "--query", to_string(spec.query),
+                                         "--queries", spec.queries_path, "--query", to_string(spec.query_type),
                                          "--repeat", std::to_string(spec.repeat), "--out", result_path};
         if (!spec.truth_path.empty()) {
           args.push_back("--truth");

@@ -1,0 +1,117 @@
+// brute_force on hand-computed cases: a point on a vertex, an edge, a face; inside and outside a
+// cube; a point near an open surface; the degenerate inputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mesh.hpp"
+#include "registry.hpp"
+
+using namespace bvhbench;
+
+namespace {
+
+/// Unit cube [0,1]^3, outward-oriented, 12 triangles.
+Mesh unit_cube() {
+  Mesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  m.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                 {2, 3, 7}, {2, 7, 6}, {1, 2, 6}, {1, 6, 5}, {0, 4, 7}, {0, 7, 3}};
+  return m;
+}
+
+Mesh one_triangle() {
+  Mesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}};
+  return m;
+}
+
+std::unique_ptr<Method> built(const Mesh& mesh) {
+  auto m = Registry::global().create("brute_force");
+  m->build(mesh, BuildContext{});
+  return m;
+}
+
+}  // namespace
+
+TEST(BruteForce, InsideAndOutsideCube) {
+  Mesh cube = unit_cube();
+  auto m = built(cube);
+  EXPECT_TRUE(m->inside({0.5, 0.5, 0.5}));
+  EXPECT_TRUE(m->inside({0.01, 0.99, 0.5}));
+  EXPECT_FALSE(m->inside({1.5, 0.5, 0.5}));
+  EXPECT_FALSE(m->inside({-0.01, 0.5, 0.5}));
+  EXPECT_FALSE(m->inside({10, 10, 10}));
+}
+
+TEST(BruteForce, CubeDistanceSignAndNormal) {
+  auto m = built(unit_cube());
+  DistanceResult d = m->distance({0.5, 0.5, 0.2});  // inside, closest face z = 0
+  EXPECT_NEAR(d.distance, -0.2, 1e-15);
+  EXPECT_NEAR(d.closest.z, 0.0, 1e-15);
+  EXPECT_NEAR(d.normal.z, -1.0, 1e-15);  // outward normal of the bottom face
+  EXPECT_TRUE(d.triangle == 0 || d.triangle == 1);
+  d = m->distance({2, 0.5, 0.5});  // outside, closest face x = 1
+  EXPECT_NEAR(d.distance, 1.0, 1e-15);
+  EXPECT_NEAR(d.normal.x, 1.0, 1e-15);
+  d = m->distance({2, 2, 2});  // closest feature: the vertex (1,1,1)
+  EXPECT_NEAR(d.distance, std::sqrt(3.0), 1e-14);
+  EXPECT_EQ(d.closest, Vec3d(1, 1, 1));
+}
+
+TEST(BruteForce, PointOnVertexEdgeFace) {
+  auto m = built(one_triangle());
+  for (Vec3d p : {Vec3d{0, 0, 0}, Vec3d{1, 0, 0}, Vec3d{0.5, 0, 0}, Vec3d{0.5, 0.5, 0}, Vec3d{0.2, 0.2, 0}}) {
+    DistanceResult d = m->distance(p);
+    EXPECT_EQ(std::abs(d.distance), 0.0) << p.x << "," << p.y;
+    EXPECT_EQ(d.closest, p);
+    EXPECT_EQ(d.triangle, 0);
+  }
+  // Off the plane: edge and vertex regions.
+  DistanceResult d = m->distance({0.5, -1, 0});
+  EXPECT_NEAR(d.distance, 1.0, 1e-15);
+  EXPECT_EQ(d.closest, Vec3d(0.5, 0, 0));
+  d = m->distance({-1, -1, 1});
+  EXPECT_NEAR(d.distance, std::sqrt(3.0), 1e-15);
+  EXPECT_EQ(d.closest, Vec3d(0, 0, 0));
+  d = m->distance({0.25, 0.25, 3});
+  EXPECT_NEAR(d.distance, 3.0, 1e-15);
+  EXPECT_NEAR(d.normal.z, 1.0, 1e-15);
+}
+
+TEST(BruteForce, OpenSurfaceWindingIsFractional) {
+  // A cube without its top: the winding number just under the opening is about 1/2 or less,
+  // well inside near the bottom it is close to 1.
+  Mesh cup = unit_cube();
+  cup.triangles.erase(cup.triangles.begin() + 2, cup.triangles.begin() + 4);
+  auto m = built(cup);
+  EXPECT_TRUE(m->inside({0.5, 0.5, 0.05}));
+  EXPECT_FALSE(m->inside({0.5, 0.5, 0.99}));
+  EXPECT_FALSE(m->inside({0.5, 0.5, 1.5}));
+}
+
+TEST(BruteForce, DegenerateTrianglesDoNotBreakIt) {
+  Mesh cube = unit_cube();
+  cube.vertices.push_back({0.5, 0.5, 0.5});
+  cube.triangles.push_back({8, 8, 8});  // collapsed to a point
+  cube.triangles.push_back({0, 1, 1});  // zero-area
+  cube.triangles.push_back(cube.triangles[0]);  // duplicate
+  auto m = built(cube);
+  DistanceResult d = m->distance({0.5, 0.5, 0.5});
+  EXPECT_EQ(d.distance, 0.0);  // on the collapsed triangle
+  EXPECT_EQ(d.triangle, 12);
+  EXPECT_TRUE(std::isfinite(d.normal.x));
+}
+
+TEST(BruteForce, CountersAreExact) {
+  Mesh cube = unit_cube();
+  auto m = built(cube);
+  m->reset_counters();
+  m->inside({0.5, 0.5, 0.5});
+  m->distance({0.5, 0.5, 0.5});  // 12 for the distance, 12 for its sign
+  auto c = m->counters();
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].name, "triangles_tested");
+  EXPECT_EQ(c[0].value, 36u);
+}
