@@ -690,6 +690,9 @@ class PlyReader {
           if (tok.empty()) throw too_few();
           double d;
           if (!parse_double(tok, d)) throw error(where() + quoted(tok) + " is not a number");
+          // Values take their declared type, so that ASCII and binary files of the same mesh
+          // read the same coordinates.
+          if (prop.type == PlyType::f32) d = double(float(d));
           if (is_vertex)
             for (int c = 0; c < 3; ++c)
               if (el.coord[c] == int(k)) v[c] = d;
@@ -799,7 +802,8 @@ class ObjReader {
           long long idx = r > 0 ? r - 1 : nv + r;
           if (r == 0 || idx < 0)
             throw error(where() + "face " + std::to_string(faces) + " has vertex index " + std::to_string(r) +
-                        " out of range (" + std::to_string(nv) + " vertices defined before it)");
+                        " out of range (" + (r == 0 ? std::string("OBJ indices start at 1") :
+                        count_of(std::uint64_t(nv), "vertex") + " defined before it") + ")");
           if (idx >= nv) {  // a forward reference: checked once every vertex is known
             if (idx > (long long)std::numeric_limits<std::uint32_t>::max())
               throw error(where() + "face " + std::to_string(faces) + " has vertex index " + std::to_string(r) +
