@@ -149,10 +149,11 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
             front = pareto_front(mp, xm.better, ym.better)
             ax.plot([p[0] for p in front], [p[1] for p in front], color=c, marker=mk,
                     markersize=6, linewidth=1.6, zorder=z + 1)
-            if len({p[2].params_key for p in mp}) > 1:
-                for x, y, j in front:
+            n_cfg = len({p[2].params_key for p in mp})
+            if n_cfg > 1:   # a sweep: name each point, or only the frontier when crowded
+                for x, y, j in (mp if n_cfg <= 6 else front):
                     ax.annotate(j.params_key or "default", (x, y), textcoords="offset points",
-                                xytext=(4, 3), fontsize=6, color=c)
+                                xytext=(6, 0), va="center", fontsize=6, color=c)
         ax.set_title(_mesh_title(rs, mesh, f"{kind} path"), fontsize=9)
         if xm.log:
             ax.set_xscale("log")
@@ -163,6 +164,8 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         ax.set_ylabel(axis_label(ym), fontsize=8)
         ax.tick_params(labelsize=7)
         if ym.log:
+            ys = [y for j, _, y in here]
+            ax.set_ylim(min(ys) / 1.8, max(ys) * 1.8)   # room for markers and labels
             _log_ticks(ax, "y", _si_formatter("q/s") if ym.unit == "queries/s" else None)
         better_x = "left" if xm.better == "lower" else "right"
         better_y = "top" if ym.better == "higher" else "bottom"
@@ -356,7 +359,8 @@ def latency_haptic(rs):
     panels = [p for p in panels if per_q.setdefault(p[0], []).append(p) or
               len(per_q[p[0]]) <= 3]
     panels.sort(key=lambda p: (p[0] != "inside", rs.mesh_triangles(p[1]) or 0))
-    fig, axes = _grid(len(panels), max_cols=3, legend_width=0.0)
+    fig, axes = _grid(len(panels), max_cols=2, legend_width=0.0,
+                      panel=(FIGSIZE_PANEL[0] + 2.2, FIGSIZE_PANEL[1]))
     all_n = [j.n_queries for j in jobs if j.n_queries]
     y_lo = 0.5 / max(all_n) if all_n else 1e-4
     for ax, (query, mesh) in zip(axes, panels):
@@ -378,7 +382,7 @@ def latency_haptic(rs):
             c, mk = method_color(j.method), method_marker(j.method)
             ax.plot(xs, ys, color=c, marker=mk, linestyle=":", linewidth=1.2, markersize=6)
             over = j.num("queries.over_deadline")
-            share = f"{100.0 * over / n:.2g}% > 1 ms" if over is not None and n else "? > 1 ms"
+            share = f"{100.0 * over / n:.2g}%" if over is not None and n else "unknown"
             handles.append(Line2D([], [], color=c, marker=mk, linestyle=":",
                                   label=f"{j.method}: {share}"))
         deadline = j.num("queries.deadline_ns") or HAPTIC_DEADLINE_NS
@@ -403,7 +407,9 @@ def latency_haptic(rs):
         ax.set_xlabel("Per-query latency (\u2190 lower is better)", fontsize=8)
         ax.set_ylabel("Share of queries slower than x", fontsize=8)
         ax.set_title(_mesh_title(rs, mesh, f"{query}, haptic path"), fontsize=9)
-        ax.legend(handles=handles, fontsize=7, loc="lower left", framealpha=0.85)
+        # Beside the panel, not on it: the tail points are what the chart is for.
+        ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  frameon=False, title="share > 1 ms", title_fontsize=7)
     note = ("Points: p50, p99, p99.9 and max (at 1/n) of one replay; dotted lines only join "
             "them. Shaded: beyond the 1 ms haptic deadline.")
     return _finish(fig, [], None, note)

@@ -17,9 +17,8 @@ KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oo
 
 # Names that mark a mesh as a stress case (degenerate, broken, adversarial input).
 STRESS_NAME_RE = re.compile(
-    r"stress|degenerate|duplicate|sliver|nonmanifold|non_manifold|open_|holes?|"
-    r"self_?intersect|flipped|zero_area|needle|cap_|coplanar|tiny|huge_coord",
-    re.IGNORECASE)
+    r"stress|stability|degenerate|(^|_)open(_|$)|nonmanifold|non_manifold|self_?intersect|"
+    r"sliver|needle", re.IGNORECASE)
 
 
 class ReportError(Exception):
@@ -199,15 +198,23 @@ class ResultSet:
 
     def _find_stress_meshes(self):
         meshes = self.meshes()
-        if "stability" in self.name.lower() or "stress" in self.name.lower():
+        suites = {str(j.get("job.suite", "")) for j in self.jobs} | {self.name}
+        if any(re.search(r"stability|stress", s, re.I) for s in suites):
             return set(meshes)
         stress = {j.mesh for j in self.jobs if j.is_stress()}
-        # A suite where many meshes end in non-ok statuses (other than 'unsupported')
-        # is a stress suite too, whatever its meshes are called.
-        bad = {j.mesh for j in self.jobs if j.status not in (OK, "unsupported")}
+        if stress:
+            return stress
+        # A suite where many meshes end in non-ok statuses (other than 'unsupported') for a
+        # good share of their jobs is a stress suite too, whatever its meshes are called.
+        bad = set()
+        for m in meshes:
+            js = [j for j in self.jobs if j.mesh == m]
+            failing = [j for j in js if j.status not in (OK, "unsupported")]
+            if len(failing) * 3 >= len(js):
+                bad.add(m)
         if len(meshes) >= 3 and len(bad) >= max(3, len(meshes) // 2):
             return set(meshes)
-        return stress
+        return set()
 
     def contexts(self):
         """Distinct (machine, run) contexts, most common first, with their job counts."""

@@ -22,7 +22,7 @@ METHOD_MARKERS = {
     "cgal_aabb": "s",
     "embree": "^",
     "openvdb": "D",
-    "brute_force": "x",
+    "brute_force": "v",
 }
 # Method order in legends and tables: the star first, then peers, then anything new (sorted).
 METHOD_ORDER = ["ebp_octree", "cgal_aabb", "embree", "openvdb", "brute_force"]
