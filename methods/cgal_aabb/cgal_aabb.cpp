@@ -1,0 +1,383 @@
+// cgal_aabb: CGAL 5.5's AABB_tree over the mesh's triangles, used the way an expert would.
+//
+//  - Geometry: the method keeps the mesh as float32 vertices + uint32 index triples (the
+//    contract's method precision). The tree's primitives are `AABB_primitive` with *external*
+//    property maps (Tag_true) and no cached datum (Tag_false): a primitive is just its triangle
+//    index (4 bytes), and the maps build the `Triangle_3` / reference point on the fly from the
+//    shared arrays. So the tree stores nodes + ids, not a copy of every triangle.
+//  - distance(p): the library's closest-point traversal (`Projection_traits`, exactly what
+//    `closest_point_and_primitive(p, hint)` runs), seeded by `best_hint(p)` (the KD-tree's nearest
+//    reference point when `kd_tree=true`, else the first primitive) or, with `coherent=true`, by
+//    the previous query's (closest point, triangle): a valid upper bound, so answers are identical.
+//    We subclass the traits only to count the boxes tested. Sign: the inside test below.
+//  - inside(p): ray parity on the *same* tree, with CGAL's own machinery behind
+//    `Side_of_triangle_mesh` (`internal::Ray_3_Triangle_3_traversal_traits`: a vertical ray first,
+//    then random rays while the answer is degenerate: a ray through an edge or a vertex, or in a
+//    triangle's plane). We do not use `Side_of_triangle_mesh` itself: it needs a FaceGraph
+//    (building a Surface_mesh would double the memory and a second tree) and its retry loop is
+//    unbounded (`do ... while (indeterminate)`), which can spin forever on a point lying on an
+//    edge. Ours retries at most kMaxRandomRays times, then counts the query as `undecided` and
+//    answers the last parity. A point on a triangle is on the boundary: answered inside.
+//    With `kernel=epick` the predicates are exact (a degenerate hit is always detected); with
+//    `simple_cartesian` they are plain double and may miscount a hit grazing an edge: that is
+//    the kernel trade-off the parameter exposes.
+//  - Degenerate (zero-area) triangles stay in the tree, so distance() sees them (their closest
+//    point is the segment or point they collapse to), but the ray test skips them: CGAL's
+//    ray-triangle predicate has the precondition "triangle not degenerate" (an assertion in
+//    debug builds), and a zero-area triangle cannot change a ray's parity anyway.
+//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially and answers one query at
+//    a time; `threads` is accepted for uniform sweeps and recorded, it changes nothing.
+#include <CGAL/AABB_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/internal/Side_of_triangle_mesh/Point_inside_vertical_ray_cast.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/version.h>
+
+#include <boost/iterator/counting_iterator.hpp>
+#include <boost/property_map/property_map.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "errors.hpp"
+#include "mesh.hpp"
+#include "registry.hpp"
+#include "system_info.hpp"
+
+namespace bvhbench {
+namespace {
+
+/// The geometry the method keeps: #V float32 positions and #F vertex-index triples.
+struct Geometry {
+  std::vector<Vec3f> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+template <class K>
+typename K::Point_3 to_point(const Vec3f& v) {
+  return typename K::Point_3(double(v.x), double(v.y), double(v.z));
+}
+
+/// Triangle index -> K::Triangle_3, built on the fly from the shared geometry. Each call is one
+/// triangle the library is about to test, so the map also counts them (after build()).
+template <class K>
+struct TriangleMap {
+  using key_type = std::uint32_t;
+  using value_type = typename K::Triangle_3;
+  using reference = value_type;
+  using category = boost::readable_property_map_tag;
+  const Geometry* g = nullptr;
+  std::uint64_t* fetched = nullptr;
+
+  friend value_type get(const TriangleMap& m, key_type i) {
+    ++*m.fetched;
+    const auto& t = m.g->triangles[i];
+    return value_type(to_point<K>(m.g->vertices[t[0]]), to_point<K>(m.g->vertices[t[1]]),
+                      to_point<K>(m.g->vertices[t[2]]));
+  }
+};
+
+/// Triangle index -> a point on it (its first vertex): what the KD-tree indexes for hints.
+template <class K>
+struct ReferencePointMap {
+  using key_type = std::uint32_t;
+  using value_type = typename K::Point_3;
+  using reference = value_type;
+  using category = boost::readable_property_map_tag;
+  const Geometry* g = nullptr;
+
+  friend value_type get(const ReferencePointMap& m, key_type i) {
+    return to_point<K>(m.g->vertices[m.g->triangles[i][0]]);
+  }
+};
+
+/// CGAL's Side_of_triangle_mesh ray traversal, plus two things: degenerate triangles are
+/// skipped (the predicate's precondition) and every box test is counted.
+template <class Tree, class K, class VerticalTag>
+class RayParityTraits
+    : public CGAL::internal::Ray_3_Triangle_3_traversal_traits<
+          typename Tree::AABB_traits, K, CGAL::internal::Default_tree_helper<Tree>, VerticalTag> {
+  using Base = CGAL::internal::Ray_3_Triangle_3_traversal_traits<
+      typename Tree::AABB_traits, K, CGAL::internal::Default_tree_helper<Tree>, VerticalTag>;
+  using Primitive = typename Tree::Primitive;
+  using Node = CGAL::AABB_node<typename Tree::AABB_traits>;
+
+ public:
+  RayParityTraits(std::pair<boost::logic::tribool, std::size_t>& status, const Tree& tree,
+                  const std::vector<bool>& degenerate, std::uint64_t* nodes)
+      : Base(status, tree.traits(), CGAL::internal::Default_tree_helper<Tree>()),
+        degenerate_(degenerate),
+        nodes_(nodes) {}
+
+  template <class Query>
+  void intersection(const Query& q, const Primitive& p) {
+    if (!degenerate_[p.id()]) Base::intersection(q, p);
+  }
+  template <class Query>
+  bool do_intersect(const Query& q, const Node& n) const {
+    ++*nodes_;
+    return Base::do_intersect(q, n);
+  }
+
+ private:
+  const std::vector<bool>& degenerate_;
+  std::uint64_t* nodes_;
+};
+
+/// The library's closest-point traversal, counting the boxes it tests.
+template <class Traits>
+class CountingProjectionTraits : public CGAL::internal::AABB_tree::Projection_traits<Traits> {
+  using Base = CGAL::internal::AABB_tree::Projection_traits<Traits>;
+  using Node = CGAL::AABB_node<Traits>;
+  using Point = typename Traits::Point_3;
+
+ public:
+  CountingProjectionTraits(const Point& hint, std::uint32_t hint_id, const Traits& t,
+                           std::uint64_t* nodes)
+      : Base(hint, hint_id, t), nodes_(nodes) {}
+  bool do_intersect(const Point& q, const Node& n) const {
+    ++*nodes_;
+    return Base::do_intersect(q, n);
+  }
+
+ private:
+  std::uint64_t* nodes_;
+};
+
+struct Options {
+  std::string kernel;
+  bool kd_tree = true;
+  bool coherent = false;
+  int threads = 1;
+};
+
+template <class K>
+class CgalAabb final : public Method {
+  using Point = typename K::Point_3;
+  using Primitive = CGAL::AABB_primitive<std::uint32_t, TriangleMap<K>, ReferencePointMap<K>,
+                                         CGAL::Tag_true /*external maps*/, CGAL::Tag_false /*no cached datum*/>;
+  using Traits = CGAL::AABB_traits<K, Primitive>;
+  using Tree = CGAL::AABB_tree<Traits>;
+  using Hint = typename Tree::Point_and_primitive_id;
+
+  /// Random rays tried after the vertical one while the parity is undecided (a degenerate hit).
+  static constexpr int kMaxRandomRays = 16;
+
+ public:
+  explicit CgalAabb(const Options& o) : opt_(o) {
+    // Fixed directions, so that counters are deterministic and independent of query order.
+    std::mt19937_64 rng(1340818006);  // CGAL's own seed for Point_inside_vertical_ray_cast
+    std::normal_distribution<double> n01;
+    for (auto& d : directions_) {
+      double x, y, z, l;
+      do {
+        x = n01(rng), y = n01(rng), z = n01(rng);
+        l = std::sqrt(x * x + y * y + z * z);
+      } while (l < 1e-3);
+      d = typename K::Vector_3(x / l, y / l, z / l);
+    }
+  }
+
+  void build(const Mesh& mesh, const BuildContext& ctx) override {
+    if (mesh.triangles.empty()) throw InputError("cgal_aabb: the mesh has no triangle");
+    try {
+      geo_.vertices.resize(mesh.vertices.size());
+      for (std::size_t i = 0; i < mesh.vertices.size(); ++i) geo_.vertices[i] = Vec3f(mesh.vertices[i]);
+      geo_.triangles = mesh.triangles;
+      geo_.triangles.shrink_to_fit();
+
+      const std::size_t nt = geo_.triangles.size();
+      degenerate_.assign(nt, false);
+      typename K::Collinear_3 collinear = K().collinear_3_object();
+      for (std::size_t i = 0; i < nt; ++i) {
+        const auto& t = geo_.triangles[i];
+        if (collinear(to_point<K>(geo_.vertices[t[0]]), to_point<K>(geo_.vertices[t[1]]),
+                      to_point<K>(geo_.vertices[t[2]]))) {
+          degenerate_[i] = true;
+          ++degenerate_count_;
+        }
+      }
+
+      TriangleMap<K> tmap{&geo_, &datum_fetches_};
+      ReferencePointMap<K> pmap{&geo_};
+      tree_.insert(boost::counting_iterator<std::uint32_t>(0),
+                   boost::counting_iterator<std::uint32_t>(std::uint32_t(nt)), tmap, pmap);
+      tree_.build();
+      bbox_ = tree_.bbox();
+
+      // The KD-tree only serves distance queries: build it now (not lazily on the first query,
+      // which would hide its cost in the query timings), and only when distances will be asked.
+      kd_built_ = opt_.kd_tree && ctx.query_type == QueryType::distance;
+      if (kd_built_) {
+        const std::size_t rss0 = current_rss_bytes();
+        tree_.accelerate_distance_queries();
+        const std::size_t rss1 = current_rss_bytes();
+        // The KD-tree (AABB_search_tree over a CGAL Kd_tree) keeps a copy of one decorated point
+        // per primitive (Point_3 + id + flag, 32 bytes) and a pointer to it, plus its nodes. Its
+        // node storage is private, so we measure the RSS growth around its construction and
+        // keep the larger of that and the lower bound from the points alone.
+        const std::size_t lower = nt * (sizeof(Point) + 8 + sizeof(void*));
+        kd_bytes_ = std::max(lower, rss1 > rss0 ? rss1 - rss0 : std::size_t(0));
+      } else {
+        tree_.do_not_accelerate_distance_queries();
+      }
+    } catch (const CGAL::Failure_exception& e) {
+      throw std::runtime_error(std::string("cgal_aabb: CGAL failure during build: ") + e.what());
+    }
+    datum_fetches_ = 0;  // the build fetched every triangle for its boxes: not query work
+  }
+
+  bool supports(QueryType) const override { return true; }
+
+  void reset_path() override { has_prev_ = false; }
+
+  bool inside(const Vec3d& p) override { return inside_impl(Point(p.x, p.y, p.z)); }
+
+  DistanceResult distance(const Vec3d& p) override {
+    const Point q(p.x, p.y, p.z);
+    const Hint hint = (opt_.coherent && has_prev_) ? prev_ : tree_.best_hint(q);
+    CountingProjectionTraits<Traits> traits(hint.first, hint.second, tree_.traits(), &nodes_visited_);
+    tree_.traversal(q, traits);
+    const Hint best = traits.closest_point_and_primitive();
+    if (opt_.coherent) {
+      prev_ = best;
+      has_prev_ = true;
+    }
+
+    DistanceResult r;
+    r.closest = Vec3d(CGAL::to_double(best.first.x()), CGAL::to_double(best.first.y()),
+                      CGAL::to_double(best.first.z()));
+    r.triangle = std::int64_t(best.second);
+    const auto& t = geo_.triangles[best.second];
+    r.normal = triangle_normal(Vec3d(geo_.vertices[t[0]]), Vec3d(geo_.vertices[t[1]]),
+                               Vec3d(geo_.vertices[t[2]]));
+    const double d = norm(r.closest - p);
+    // On the surface the sign is moot, and a ray from there is degenerate by construction.
+    r.distance = (d > 0 && inside_impl(q)) ? -d : d;
+    return r;
+  }
+
+  std::size_t structure_bytes() const override {
+    return geometry_bytes() + tree_bytes() + kd_bytes_;
+  }
+
+  std::vector<Counter> counters() const override {
+    return {{"triangles_tested", datum_fetches_},
+            {"nodes_visited", nodes_visited_},
+            {"rays_shot", rays_shot_},
+            {"undecided", undecided_}};
+  }
+  void reset_counters() override {
+    datum_fetches_ = nodes_visited_ = rays_shot_ = undecided_ = 0;
+  }
+
+  nlohmann::json info() const override {
+    return {{"kernel", opt_.kernel},
+            {"triangles", geo_.triangles.size()},
+            {"degenerate_triangles", degenerate_count_},
+            {"tree_nodes", tree_.size() > 1 ? tree_.size() - 1 : 0},
+            {"node_bytes", sizeof(CGAL::AABB_node<Traits>)},
+            {"primitive_bytes", sizeof(Primitive)},
+            {"kd_tree_built", kd_built_},
+            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", kd_bytes_}}},
+            {"threads_effective", 1}};
+  }
+
+ private:
+  std::size_t geometry_bytes() const {
+    return geo_.vertices.capacity() * sizeof(Vec3f) +
+           geo_.triangles.capacity() * sizeof(geo_.triangles[0]) + (degenerate_.capacity() + 7) / 8;
+  }
+  /// Exact: the tree reserves #F-1 nodes and keeps one Primitive (its id) per triangle.
+  std::size_t tree_bytes() const {
+    const std::size_t n = tree_.size();
+    return (n > 1 ? n - 1 : 0) * sizeof(CGAL::AABB_node<Traits>) + n * sizeof(Primitive);
+  }
+
+  bool inside_impl(const Point& p) {
+    // As Side_of_triangle_mesh: outside the box is outside (no ray needed).
+    if (p.x() < bbox_.xmin() || p.x() > bbox_.xmax() || p.y() < bbox_.ymin() ||
+        p.y() > bbox_.ymax() || p.z() < bbox_.zmin() || p.z() > bbox_.zmax())
+      return false;
+
+    // Vertical ray first, towards the nearer side of the box (fewer boxes crossed).
+    const double dz = 2 * CGAL::to_double(p.z()) < bbox_.zmin() + bbox_.zmax() ? -1.0 : 1.0;
+    std::pair<boost::logic::tribool, std::size_t> status(boost::logic::indeterminate, 0);
+    {
+      ++rays_shot_;
+      typename K::Ray_3 ray(p, typename K::Vector_3(0, 0, dz));
+      RayParityTraits<Tree, K, CGAL::Tag_true> traits(status, tree_, degenerate_, &nodes_visited_);
+      tree_.traversal(ray, traits);
+    }
+    for (int i = 0; i < kMaxRandomRays && boost::logic::indeterminate(status.first); ++i) {
+      ++rays_shot_;
+      status = {boost::logic::indeterminate, 0};
+      typename K::Ray_3 ray(p, directions_[std::size_t(i)]);
+      RayParityTraits<Tree, K, CGAL::Tag_false> traits(status, tree_, degenerate_, &nodes_visited_);
+      tree_.traversal(ray, traits);
+    }
+    if (boost::logic::indeterminate(status.first)) {
+      ++undecided_;  // every ray grazed an edge: the point is (almost) on the surface
+      return (status.second & 1) == 1;
+    }
+    if (!status.first) return true;  // the point lies on a triangle: boundary counts as inside
+    return (status.second & 1) == 1;
+  }
+
+  Options opt_;
+  Geometry geo_;
+  std::vector<bool> degenerate_;
+  std::size_t degenerate_count_ = 0;
+  Tree tree_;
+  CGAL::Bbox_3 bbox_;
+  bool kd_built_ = false;
+  std::size_t kd_bytes_ = 0;
+  std::array<typename K::Vector_3, kMaxRandomRays> directions_;
+
+  bool has_prev_ = false;
+  Hint prev_;
+
+  std::uint64_t datum_fetches_ = 0, nodes_visited_ = 0, rays_shot_ = 0, undecided_ = 0;
+};
+
+}  // namespace
+}  // namespace bvhbench
+
+void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
+  using namespace bvhbench;
+  note_library_version("cgal", CGAL_VERSION_STR);
+  MethodInfo m;
+  m.name = "cgal_aabb";
+  m.description =
+      "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
+      "Side_of_triangle_mesh's ray parity on the same tree";
+  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  m.params = {
+      {"kernel", ParamType::choice, "epick",
+       "geometric kernel: epick (exact predicates) or simple_cartesian (Simple_cartesian<double>)",
+       {"epick", "simple_cartesian"}},
+      {"kd_tree", ParamType::boolean, "true",
+       "accelerate_distance_queries: hint each distance query with the KD-tree's nearest vertex", {}},
+      {"coherent", ParamType::boolean, "false",
+       "hint each distance query with the previous closest point and triangle (haptic paths)", {}},
+      {"threads", ParamType::integer, "1",
+       "recorded only: CGAL 5.5 builds and queries this tree sequentially", {}, 1, 1024},
+  };
+  m.create = [](const Params& p) -> std::unique_ptr<Method> {
+    Options o;
+    o.kernel = p.get("kernel");
+    o.kd_tree = p.get_bool("kd_tree");
+    o.coherent = p.get_bool("coherent");
+    o.threads = int(p.get_int("threads"));
+    if (o.kernel == "simple_cartesian")
+      return std::make_unique<CgalAabb<CGAL::Simple_cartesian<double>>>(o);
+    return std::make_unique<CgalAabb<CGAL::Exact_predicates_inexact_constructions_kernel>>(o);
+  };
+  r.add(std::move(m));
+}

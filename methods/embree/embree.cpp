@@ -1,0 +1,405 @@
+// embree: Embree 3 (Debian's 3.13) over one triangle geometry, used the way an expert would.
+//
+//  - Geometry: float32 vertices and uint32 index triples, owned by the method and *shared* with
+//    Embree (rtcSetSharedGeometryBuffer, no copy inside Embree). The vertex buffer has one spare
+//    element because Embree reads the last vertex with a 16-byte load.
+//  - distance(p): rtcPointQuery with our own callback. Embree hands us candidate triangle ids in
+//    traversal order; the callback computes the exact point-triangle distance in *double* on our
+//    own arrays (Ericson's closest point, the same routine as brute_force, on the float32
+//    vertices promoted to double), keeps the best (ties to the lowest index, as brute_force) and
+//    shrinks the query radius to it. Double, not float: the answer is then exact for the float32
+//    mesh the method holds, and the closest triangle agrees with the reference except for true
+//    ties. The radius Embree culls with is a float around a float copy of p: we round it up by
+//    the float error of both, so no closer triangle can be culled.
+//    coherent=true seeds the radius with |p - previous closest point| (plus the same margin): the
+//    previous closest point lies on the surface, so that is a valid upper bound, and answers are
+//    identical; if nothing lies within it (it cannot, except by rounding) we query again unbounded.
+//    The sign comes from the inside test below.
+//  - inside(p): ray parity. An intersect filter records every hit along the ray and rejects it,
+//    so one rtcIntersect1 traverses the whole ray and reports all crossings. The same triangle
+//    may be reported more than once (spatial splits at quality=high put it in several leaves):
+//    hits are deduplicated by triangle id. A hit within kEdgeEps (barycentric) of an edge or a
+//    vertex may be counted by both neighbours (or, without robust mode, by neither): such a ray
+//    is discarded and shot again in the next of a fixed table of random directions (at most
+//    kMaxAttempts per vote). rays=3|5 shoots that many independent rays and takes the majority.
+//    Points outside the mesh's box are outside without a ray.
+//  - Memory: Embree has no API for its BVH's size. structure_bytes() is our two buffers plus the
+//    RSS growth across rtcCommitScene (Embree allocates its BVH there, with its own allocator);
+//    info() gives the parts.
+//  - Errors: a device error callback records Embree's message; build() checks rtcGetDeviceError
+//    after commit and queries check the recorded flag, throwing std::runtime_error with the
+//    message (the harness turns it into status `error`). Nothing is thrown through Embree.
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "errors.hpp"
+#include "mesh.hpp"
+#include "registry.hpp"
+#include "system_info.hpp"
+
+namespace bvhbench {
+namespace {
+
+static_assert(sizeof(Vec3f) == 12, "Embree's RTC_FORMAT_FLOAT3 buffer is tightly packed floats");
+static_assert(sizeof(std::array<std::uint32_t, 3>) == 12, "RTC_FORMAT_UINT3 index buffer");
+
+constexpr float kEdgeEps = 1e-5f;  ///< barycentric distance to an edge that makes a hit ambiguous
+constexpr int kDirections = 64;    ///< fixed table of ray directions (deterministic counters)
+constexpr int kMaxAttempts = 8;    ///< rays per vote before giving up on a degenerate-free one
+
+struct Options {
+  std::string quality = "medium";
+  bool robust = true;
+  int rays = 1;
+  bool coherent = false;
+  int threads = 1;
+};
+
+/// State of one point query, handed to the callback through userPtr.
+struct PointQueryState {
+  const Vec3f* vertices = nullptr;
+  const std::array<std::uint32_t, 3>* triangles = nullptr;
+  Vec3d p;             ///< the query point, in double (Embree only sees a float copy)
+  double margin = 0;     ///< added to a distance before it becomes Embree's float radius
+  double best_d2 = std::numeric_limits<double>::infinity();
+  std::int64_t best = -1;
+  Vec3d best_q;
+  std::uint64_t tested = 0;
+};
+
+/// A float radius that is >= d plus the float rounding of the query point and of Embree's
+/// box-distance arithmetic.
+inline float search_radius(double d, double margin) {
+  const float r = float((d + margin) * (1.0 + 1e-6));
+  return std::nextafter(r, std::numeric_limits<float>::infinity());
+}
+
+bool point_query_callback(RTCPointQueryFunctionArguments* args) {
+  auto& s = *static_cast<PointQueryState*>(args->userPtr);
+  ++s.tested;
+  const std::uint32_t id = args->primID;
+  const auto& t = s.triangles[id];
+  const Vec3d q = closest_point_on_triangle(s.p, Vec3d(s.vertices[t[0]]), Vec3d(s.vertices[t[1]]),
+                                            Vec3d(s.vertices[t[2]]));
+  const double d2 = squared_norm(q - s.p);
+  if (d2 < s.best_d2 || (d2 == s.best_d2 && std::int64_t(id) < s.best)) {
+    s.best_d2 = d2;
+    s.best = id;
+    s.best_q = q;
+    const float r = search_radius(std::sqrt(d2), s.margin);
+    if (r < args->query->radius) {
+      args->query->radius = r;
+      return true;  // the radius shrank: Embree re-culls with it
+    }
+  }
+  return false;
+}
+
+/// Per-ray state: the intersect context comes first so the filter can get back to the rest.
+struct RayState {
+  RTCIntersectContext context;
+  std::vector<std::uint32_t>* hits;
+  bool near_edge;
+};
+
+void all_hits_filter(const RTCFilterFunctionNArguments* args) {
+  auto* s = reinterpret_cast<RayState*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+    if (std::min({u, v, 1.0f - u - v}) < kEdgeEps) s->near_edge = true;
+    s->hits->push_back(RTCHitN_primID(args->hit, args->N, i));
+    args->valid[i] = 0;  // reject: traversal goes on to the next crossing
+  }
+}
+
+const char* error_name(RTCError e) {
+  switch (e) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_UNKNOWN: return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+  }
+  return "error";
+}
+
+class Embree final : public Method {
+ public:
+  explicit Embree(const Options& o) : opt_(o) {
+    std::mt19937_64 rng(0x5eedbeefULL);
+    std::normal_distribution<double> n01;
+    for (auto& d : directions_) {
+      Vec3d v;
+      do v = Vec3d(n01(rng), n01(rng), n01(rng));
+      while (norm(v) < 1e-3);
+      d = Vec3f(normalized(v));
+    }
+  }
+
+  ~Embree() override {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+  }
+
+  void build(const Mesh& mesh, const BuildContext&) override {
+    if (mesh.triangles.empty()) throw InputError("embree: the mesh has no triangle");
+    if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
+      throw InputError("embree: more triangles than 32-bit primitive ids can address");
+
+    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+    vertices_.resize(nv + 1);  // + 1: Embree reads the last vertex with a 16-byte load
+    for (std::size_t i = 0; i < nv; ++i) {
+      vertices_[i] = Vec3f(mesh.vertices[i]);
+      bounds_.add(Vec3d(vertices_[i]));
+    }
+    vertices_[nv] = Vec3f();
+    triangles_.assign(mesh.triangles.begin(), mesh.triangles.end());
+    for (const auto& t : triangles_)
+      if (squared_norm(cross(Vec3d(vertices_[t[1]]) - Vec3d(vertices_[t[0]]),
+                             Vec3d(vertices_[t[2]]) - Vec3d(vertices_[t[0]]))) == 0)
+        ++degenerate_count_;
+    const Vec3d far = vmax(vmax(bounds_.lo, -bounds_.lo), vmax(bounds_.hi, -bounds_.hi));
+    magnitude_ = std::max({far.x, far.y, far.z});
+
+    const std::string config = "threads=" + std::to_string(opt_.threads) + ",verbose=0";
+    device_ = rtcNewDevice(config.c_str());
+    if (!device_)
+      throw std::runtime_error(std::string("embree: rtcNewDevice(\"") + config +
+                               "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
+    rtcSetDeviceErrorFunction(device_, &Embree::on_error, this);
+
+    const RTCBuildQuality quality = opt_.quality == "low"    ? RTC_BUILD_QUALITY_LOW
+                                    : opt_.quality == "high" ? RTC_BUILD_QUALITY_HIGH
+                                                             : RTC_BUILD_QUALITY_MEDIUM;
+    scene_ = rtcNewScene(device_);
+    rtcSetSceneFlags(scene_, opt_.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneBuildQuality(scene_, quality);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geom, quality);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(),
+                               0, sizeof(Vec3f), nv);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, triangles_.data(),
+                               0, sizeof(triangles_[0]), nt);
+    rtcSetGeometryIntersectFilterFunction(geom, &all_hits_filter);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    check("building the scene");
+
+    const std::size_t rss0 = current_rss_bytes();
+    rtcCommitScene(scene_);
+    const std::size_t rss1 = current_rss_bytes();
+    check("rtcCommitScene");
+    bvh_bytes_ = rss1 > rss0 ? rss1 - rss0 : 0;
+  }
+
+  bool supports(QueryType) const override { return true; }
+
+  void reset_path() override { has_prev_ = false; }
+
+  bool inside(const Vec3d& p) override {
+    const bool r = inside_impl(p);
+    if (failed_) check("a ray query");
+    return r;
+  }
+
+  DistanceResult distance(const Vec3d& p) override {
+    PointQueryState s;
+    s.vertices = vertices_.data();
+    s.triangles = triangles_.data();
+    s.p = p;
+    const Vec3f pf(p);
+    // Float rounding of the query point, plus Embree's float box arithmetic at this magnitude.
+    s.margin = norm(Vec3d(pf) - p) +
+               4.0 * std::numeric_limits<float>::epsilon() *
+                   (magnitude_ + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
+    const float seeded = (opt_.coherent && has_prev_) ? search_radius(norm(p - prev_closest_), s.margin)
+                                                      : std::numeric_limits<float>::infinity();
+    point_query(s, pf, seeded);
+    if (s.best < 0 && seeded != std::numeric_limits<float>::infinity()) {
+      ++fallbacks_;
+      point_query(s, pf, std::numeric_limits<float>::infinity());
+    }
+    if (failed_) check("rtcPointQuery");
+    if (s.best < 0) throw std::runtime_error("embree: rtcPointQuery found no triangle");
+    triangles_tested_ += s.tested;
+
+    DistanceResult r;
+    r.closest = s.best_q;
+    r.triangle = s.best;
+    const auto& t = triangles_[std::size_t(s.best)];
+    r.normal = triangle_normal(Vec3d(vertices_[t[0]]), Vec3d(vertices_[t[1]]), Vec3d(vertices_[t[2]]));
+    const double d = std::sqrt(s.best_d2);
+    r.distance = (d > 0 && inside_impl(p)) ? -d : d;
+    if (opt_.coherent) {
+      prev_closest_ = s.best_q;
+      has_prev_ = true;
+    }
+    return r;
+  }
+
+  std::size_t structure_bytes() const override { return buffer_bytes() + bvh_bytes_; }
+
+  std::vector<Counter> counters() const override {
+    return {{"triangles_tested", triangles_tested_},
+            {"point_queries", point_queries_},
+            {"rays_shot", rays_shot_},
+            {"ray_hits_reported", hits_reported_},
+            {"undecided", undecided_}};
+  }
+  void reset_counters() override {
+    triangles_tested_ = point_queries_ = rays_shot_ = hits_reported_ = undecided_ = 0;
+  }
+
+  nlohmann::json info() const override {
+    return {{"triangles", triangles_.size()},
+            {"degenerate_triangles", degenerate_count_},
+            {"quality", opt_.quality},
+            {"robust", opt_.robust},
+            {"embree_version", RTC_VERSION_STRING},
+            {"bytes",
+             {{"buffers", buffer_bytes()},
+              {"bvh_rss_delta", bvh_bytes_},
+              {"note", "Embree has no size API: its BVH is the RSS growth across rtcCommitScene"}}},
+            {"coherent_fallbacks", fallbacks_}};
+  }
+
+ private:
+  static void on_error(void* self, RTCError code, const char* str) {
+    auto* m = static_cast<Embree*>(self);
+    m->failed_ = true;
+    if (m->error_.empty()) m->error_ = std::string(error_name(code)) + (str ? std::string(": ") + str : "");
+  }
+
+  /// Turns a recorded device error into an exception at the method boundary.
+  void check(const char* where) {
+    const RTCError e = rtcGetDeviceError(device_);
+    if (e == RTC_ERROR_NONE && !failed_) return;
+    std::string msg = error_.empty() ? error_name(e) : error_;
+    throw std::runtime_error(std::string("embree: ") + where + ": " + msg);
+  }
+
+  std::size_t buffer_bytes() const {
+    return vertices_.capacity() * sizeof(Vec3f) + triangles_.capacity() * sizeof(triangles_[0]);
+  }
+
+  void point_query(PointQueryState& s, const Vec3f& pf, float radius) {
+    ++point_queries_;
+    RTCPointQuery q;
+    q.x = pf.x, q.y = pf.y, q.z = pf.z;
+    q.time = 0.f;
+    q.radius = radius;
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    rtcPointQuery(scene_, &q, &ctx, &point_query_callback, &s);
+  }
+
+  /// Parity of the crossings along the ray from o in direction d; false in *degenerate* when a
+  /// hit was too close to an edge to be counted reliably.
+  bool parity(const Vec3f& o, const Vec3f& d, bool* degenerate) {
+    hits_.clear();
+    RayState s;
+    rtcInitIntersectContext(&s.context);
+    s.hits = &hits_;
+    s.near_edge = false;
+    RTCRayHit rh;
+    rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
+    rh.ray.tnear = 0.f;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.time = 0.f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &s.context, &rh);
+    ++rays_shot_;
+    hits_reported_ += hits_.size();
+    std::sort(hits_.begin(), hits_.end());
+    const std::size_t crossings = std::size_t(std::unique(hits_.begin(), hits_.end()) - hits_.begin());
+    *degenerate = s.near_edge;
+    return (crossings & 1) == 1;
+  }
+
+  bool inside_impl(const Vec3d& p) {
+    if (!bounds_.contains(p)) return false;
+    const Vec3f o(p);
+    int next = 0, votes_in = 0;
+    for (int v = 0; v < opt_.rays; ++v) {
+      bool odd = false, degenerate = true;
+      for (int a = 0; a < kMaxAttempts && degenerate; ++a)
+        odd = parity(o, directions_[std::size_t(next++ % kDirections)], &degenerate);
+      if (degenerate) ++undecided_;
+      votes_in += odd ? 1 : 0;
+    }
+    return 2 * votes_in > opt_.rays;
+  }
+
+  Options opt_;
+  std::vector<Vec3f> vertices_;                         // #V + 1 (padding), float32
+  std::vector<std::array<std::uint32_t, 3>> triangles_;  // #F
+  Box3d bounds_;
+  double magnitude_ = 0;  // largest |coordinate| of the mesh
+  std::size_t degenerate_count_ = 0;
+  std::array<Vec3f, kDirections> directions_;
+
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  std::size_t bvh_bytes_ = 0;
+  bool failed_ = false;
+  std::string error_;
+
+  std::vector<std::uint32_t> hits_;
+  bool has_prev_ = false;
+  Vec3d prev_closest_;
+
+  std::uint64_t triangles_tested_ = 0, point_queries_ = 0, rays_shot_ = 0, hits_reported_ = 0,
+                undecided_ = 0, fallbacks_ = 0;
+};
+
+}  // namespace
+}  // namespace bvhbench
+
+void bvhbench_register_embree(bvhbench::Registry& r) {
+  using namespace bvhbench;
+  note_library_version("embree", RTC_VERSION_STRING);
+  MethodInfo m;
+  m.name = "embree";
+  m.description =
+      "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
+      "by all-hits ray parity with jittered re-shots and majority vote";
+  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  m.params = {
+      {"quality", ParamType::choice, "medium", "BVH build quality (high = spatial splits)",
+       {"low", "medium", "high"}},
+      {"robust", ParamType::boolean, "true",
+       "RTC_SCENE_FLAG_ROBUST: watertight ray-triangle tests (no ray slips between neighbours)", {}},
+      {"rays", ParamType::choice, "1", "rays per inside test, majority vote", {"1", "3", "5"}},
+      {"coherent", ParamType::boolean, "false",
+       "seed the point-query radius with the distance to the previous closest point", {}},
+      {"threads", ParamType::integer, "1", "Embree device threads (build)", {}, 1, 1024},
+  };
+  m.create = [](const Params& p) -> std::unique_ptr<Method> {
+    Options o;
+    o.quality = p.get("quality");
+    o.robust = p.get_bool("robust");
+    o.rays = std::stoi(p.get("rays"));
+    o.coherent = p.get_bool("coherent");
+    o.threads = int(p.get_int("threads"));
+    return std::make_unique<Embree>(o);
+  };
+  r.add(std::move(m));
+}
