@@ -1,15 +1,655 @@
-// `bvhbench compare`: placeholder until issue 9 lands.
+// `bvhbench compare BASE NEW`: pairs the jobs of two result sets and says, per pair, whether
+// anything changed. Design and rationale: docs/compare.md.
+#include "compare.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
 #include "errors.hpp"
 
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
 namespace bvhbench {
 
+// ---------------------------------------------------------------------------------------------
+// Mann-Whitney U
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+/// Mid-ranks (1-based) of the pooled sample, and the tie groups' sizes.
+std::vector<double> midranks(const std::vector<double>& pooled, std::vector<std::size_t>* ties) {
+  const std::size_t n = pooled.size();
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return pooled[a] < pooled[b]; });
+  std::vector<double> rank(n);
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i;
+    while (j + 1 < n && pooled[order[j + 1]] == pooled[order[i]]) ++j;
+    const double r = 0.5 * double(i + 1 + j + 1);
+    for (std::size_t k = i; k <= j; ++k) rank[order[k]] = r;
+    if (ties) ties->push_back(j - i + 1);
+    i = j + 1;
+  }
+  return rank;
+}
+
+}  // namespace
+
+MannWhitney mann_whitney_u(const std::vector<double>& x, const std::vector<double>& y, bool force_exact,
+                           bool force_asymptotic) {
+  MannWhitney r;
+  const std::size_t n1 = x.size(), n2 = y.size(), n = n1 + n2;
+  if (n1 == 0 || n2 == 0) return r;
+  std::vector<double> pooled(x);
+  pooled.insert(pooled.end(), y.begin(), y.end());
+  std::vector<std::size_t> ties;
+  const std::vector<double> rank = midranks(pooled, &ties);
+  double r1 = 0;
+  for (std::size_t i = 0; i < n1; ++i) r1 += rank[i];
+  r.u1 = r1 - double(n1) * double(n1 + 1) / 2;
+  const double u2 = double(n1) * double(n2) - r.u1;
+  r.u = std::max(r.u1, u2);
+
+  const bool exact = force_exact || (!force_asymptotic && n1 <= kMannWhitneyExactMax && n2 <= kMannWhitneyExactMax);
+  if (exact) {
+    // Permutation distribution of the first sample's rank sum: count the n1-subsets of the
+    // pooled ranks by their sum. Ranks are doubled so that mid-ranks (k + 1/2) are integers.
+    std::vector<long> r2(n);
+    long total2 = 0;
+    for (std::size_t i = 0; i < n; ++i) total2 += (r2[i] = std::lround(2 * rank[i]));
+    const long obs2 = std::lround(2 * r1);
+    // ways[k][s]: number of k-subsets of the ranks seen so far with doubled sum s.
+    std::vector<std::vector<long double>> ways(n1 + 1, std::vector<long double>(std::size_t(total2) + 1, 0.0L));
+    ways[0][0] = 1;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = std::min(i + 1, n1); k >= 1; --k)
+        for (long s = total2; s >= r2[i]; --s) ways[k][std::size_t(s)] += ways[k - 1][std::size_t(s - r2[i])];
+    long double all = 0, le = 0, ge = 0;
+    for (long s = 0; s <= total2; ++s) {
+      const long double w = ways[n1][std::size_t(s)];
+      all += w;
+      if (s <= obs2) le += w;
+      if (s >= obs2) ge += w;
+    }
+    r.p_value = double(std::min<long double>(1.0L, 2.0L * std::min(le, ge) / all));
+    r.exact = true;
+  } else {
+    double tie_term = 0;
+    for (std::size_t t : ties) tie_term += double(t) * double(t) * double(t) - double(t);
+    const double nn = double(n);
+    const double var = double(n1) * double(n2) / 12.0 * ((nn + 1) - tie_term / (nn * (nn - 1)));
+    if (var <= 0) {
+      r.p_value = 1;  // every value equal: nothing to tell apart
+    } else {
+      const double z = (r.u - double(n1) * double(n2) / 2 - 0.5) / std::sqrt(var);
+      r.p_value = std::min(1.0, std::max(0.0, std::erfc(z / std::sqrt(2.0))));
+    }
+    r.exact = false;
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading result sets
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+const json& at(const json& j, std::initializer_list<const char*> path) {
+  static const json null_json;
+  const json* p = &j;
+  for (const char* k : path) {
+    if (!p->is_object()) return null_json;
+    auto it = p->find(k);
+    if (it == p->end()) return null_json;
+    p = &*it;
+  }
+  return *p;
+}
+
+std::string str(const json& j, const std::string& fallback = "") {
+  return j.is_string() ? j.get<std::string>() : fallback;
+}
+
+/// Checks the parts of a result that compare relies on; a violation is bad input (exit 2).
+void validate_result(const std::string& file, const json& r) {
+  if (!r.is_object()) throw file_error(file, "not a bvhbench result (a JSON object is expected)");
+  const std::string schema = str(at(r, {"schema"}));
+  if (schema.rfind("bvhbench.result/", 0) != 0)
+    throw file_error(file, "not a bvhbench result (no \"schema\": \"bvhbench.result/1\")");
+  if (schema != "bvhbench.result/1") throw file_error(file, "unknown result schema '" + schema + "'");
+  if (!at(r, {"status"}).is_string()) throw file_error(file, "result without a \"status\" string");
+  if (!at(r, {"job"}).is_object()) throw file_error(file, "result without a \"job\" object");
+  if (!at(r, {"job", "method"}).is_string()) throw file_error(file, "result without job.method");
+  auto need_object_or_null = [&](const json& v, const char* what) {
+    if (!v.is_null() && !v.is_object()) throw file_error(file, std::string(what) + " must be an object");
+  };
+  need_object_or_null(at(r, {"counters"}), "counters");
+  need_object_or_null(at(r, {"accuracy"}), "accuracy");
+  need_object_or_null(at(r, {"calibration"}), "calibration");
+  need_object_or_null(at(r, {"job", "params"}), "job.params");
+  const json& samples = at(r, {"queries", "throughput_qps", "samples"});
+  if (!samples.is_null()) {
+    if (!samples.is_array()) throw file_error(file, "queries.throughput_qps.samples must be an array");
+    for (auto& s : samples)
+      if (!s.is_number()) throw file_error(file, "queries.throughput_qps.samples holds a non-number");
+  }
+  const json& counters = at(r, {"counters"});
+  if (counters.is_object())
+    for (auto& [k, v] : counters.items())
+      if (!v.is_number() && !v.is_null()) throw file_error(file, "counter '" + k + "' is not a number");
+  const json& cal = at(r, {"calibration", "median_seconds"});
+  if (!cal.is_null() && !cal.is_number()) throw file_error(file, "calibration.median_seconds must be a number");
+}
+
+json read_result_file(const std::string& file) {
+  std::ifstream f(file, std::ios::binary);
+  if (!f) throw file_error(file, "cannot read");
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) throw file_error(file, "read failed");
+  json r;
+  try {
+    r = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw file_error(file, std::string("malformed JSON: ") + e.what());
+  }
+  validate_result(file, r);
+  return r;
+}
+
+}  // namespace
+
+ResultSet load_result_set(const std::string& path) {
+  ResultSet set;
+  set.path = path;
+  std::error_code ec;
+  const fs::path p(path);
+  if (!fs::exists(p, ec)) throw file_error(path, "no such file or folder");
+  if (fs::is_directory(p, ec)) {
+    const fs::path dir = fs::is_directory(p / "runs", ec) ? p / "runs" : p;
+    fs::directory_iterator it(dir, ec), end;
+    if (ec) throw file_error(dir.string(), "cannot list folder: " + ec.message());
+    for (; it != end; it.increment(ec)) {
+      if (ec) throw file_error(dir.string(), "cannot list folder: " + ec.message());
+      if (it->path().extension() == ".json" && !fs::is_directory(it->path(), ec)) set.files.push_back(it->path().string());
+    }
+    if (set.files.empty()) throw file_error(dir.string(), "no result files (*.json): not a result folder?");
+    std::sort(set.files.begin(), set.files.end());
+  } else {
+    set.files.push_back(path);
+  }
+  for (auto& f : set.files) set.results.push_back(read_result_file(f));
+  return set;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The comparison
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+std::string fmt(double v, const char* f = "%.6g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+std::string show(const json& v) {
+  if (v.is_null()) return "(none)";
+  if (v.is_number_float()) return fmt(v.get<double>(), "%.17g");
+  return v.dump();
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size();
+  return m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
+}
+
+/// A human name for a job: the suite's id, else what identifies it.
+std::string job_label(const json& r) {
+  std::string id = str(at(r, {"job", "id"}));
+  if (!id.empty()) return id;
+  std::string mesh = str(at(r, {"job", "mesh", "name"}));
+  if (mesh.empty()) mesh = fs::path(str(at(r, {"job", "mesh", "path"}), "?")).stem().string();
+  std::string q = str(at(r, {"job", "queries", "kind"}));
+  if (q.empty()) q = fs::path(str(at(r, {"job", "queries", "path"}), "?")).stem().string();
+  const json& n = at(r, {"job", "queries", "n"});
+  if (n.is_number()) q += "-n" + std::to_string(n.get<long long>());
+  std::string spec = str(at(r, {"job", "method_spec"}), str(at(r, {"job", "method"})));
+  return mesh + "__" + q + "__" + str(at(r, {"job", "query"}), "?") + "__" + spec;
+}
+
+/// The pairing key of the contract: method, resolved parameters, mesh sha256, query-set
+/// sha256, query type. Empty when the result does not carry them all (e.g. a status row written
+/// for a job whose child crashed before it read its inputs).
+std::string primary_key(const json& r) {
+  const json& msha = at(r, {"job", "mesh", "sha256"});
+  const json& qsha = at(r, {"job", "queries", "sha256"});
+  const json& query = at(r, {"job", "query"});
+  if (!msha.is_string() || !qsha.is_string() || !query.is_string()) return "";
+  const json& params = at(r, {"job", "params"});
+  return str(at(r, {"job", "method"})) + "|" + (params.is_object() ? params.dump() : "{}") + "|" +
+         msha.get<std::string>() + "|" + qsha.get<std::string>() + "|" + query.get<std::string>();
+}
+
+/// The fallback key for results without hashes: the job's name as the suite wrote it.
+std::string secondary_key(const json& r) {
+  const json& n = at(r, {"job", "queries", "n"});
+  const json& seed = at(r, {"job", "queries", "seed"});
+  return job_label(r) + "|" + (n.is_number() ? n.dump() : "") + "|" + (seed.is_number() ? seed.dump() : "");
+}
+
+/// Leaves of a JSON tree as "a.b.c" -> value. File paths are not results: skipped.
+void flatten(const json& j, const std::string& prefix, std::map<std::string, json>* out) {
+  if (j.is_object()) {
+    for (auto& [k, v] : j.items()) {
+      if (k == "truth" || k == "path" || (k.size() > 5 && k.compare(k.size() - 5, 5, "_path") == 0)) continue;
+      flatten(v, prefix.empty() ? k : prefix + "." + k, out);
+    }
+  } else {
+    (*out)[prefix] = j;
+  }
+}
+
+bool same_value(const json& a, const json& b, double rtol) {
+  if (a.is_number() && b.is_number()) {
+    const double x = a.get<double>(), y = b.get<double>();
+    if (x == y) return true;
+    // Integers (counts) are exact; a tolerance only for floating summaries.
+    if (!a.is_number_float() && !b.is_number_float()) return false;
+    return std::fabs(x - y) <= rtol * std::max(std::fabs(x), std::fabs(y));
+  }
+  return a == b;
+}
+
+std::string change_text(const json& a, const json& b) {
+  std::string s = show(a) + " -> " + show(b);
+  if (a.is_number() && b.is_number() && a.get<double>() != 0)
+    s += " (" + fmt(100.0 * (b.get<double>() / a.get<double>() - 1), "%+.3g") + "%)";
+  return s;
+}
+
+std::vector<double> qps_samples(const json& r) {
+  std::vector<double> v;
+  for (auto& s : at(r, {"queries", "throughput_qps", "samples"}))
+    if (s.is_number()) v.push_back(s.get<double>());
+  return v;
+}
+
+/// Throughput statistics of one pair, normalised by each side's calibration when both have one.
+json timing_block(const json& b, const json& n, const CompareOptions& opt) {
+  json t;
+  std::vector<double> xb = qps_samples(b), xn = qps_samples(n);
+  t["n_base"] = xb.size();
+  t["n_new"] = xn.size();
+  t["base_qps_median"] = xb.empty() ? json(nullptr) : json(median_of(xb));
+  t["new_qps_median"] = xn.empty() ? json(nullptr) : json(median_of(xn));
+  const json& cb = at(b, {"calibration", "median_seconds"});
+  const json& cn = at(n, {"calibration", "median_seconds"});
+  const std::string kb = str(at(b, {"calibration", "kernel"})), kn = str(at(n, {"calibration", "kernel"}));
+  const bool calibrated = cb.is_number() && cn.is_number() && cb.get<double>() > 0 && cn.get<double>() > 0 && kb == kn;
+  t["calibrated"] = calibrated;
+  t["base_calibration_s"] = cb;
+  t["new_calibration_s"] = cn;
+  std::string note;
+  if (calibrated) {
+    // qps x kernel seconds: the same on a machine k times slower, where both scale by k.
+    for (double& v : xb) v *= cb.get<double>();
+    for (double& v : xn) v *= cn.get<double>();
+  } else if (kb != kn && !kb.empty() && !kn.empty()) {
+    note = "calibration kernels differ (" + kb + " vs " + kn + "): raw throughput compared";
+  } else {
+    note = std::string("no calibration in ") + (cb.is_number() ? "NEW" : cn.is_number() ? "BASE" : "either set") +
+           ": raw throughput compared";
+  }
+  if (xb.empty() || xn.empty()) {
+    t["verdict"] = "unchanged";
+    t["change"] = nullptr;
+    t["p_value"] = nullptr;
+    t["note"] = "no per-repetition throughput samples: not compared";
+    return t;
+  }
+  const double mb = median_of(xb), mn = median_of(xn);
+  const double change = mb > 0 ? mn / mb - 1 : 0;
+  MannWhitney mw = mann_whitney_u(xb, xn);
+  t["change"] = change;
+  t["p_value"] = mw.p_value;
+  t["test"] = mw.exact ? "mann-whitney exact" : "mann-whitney normal";
+  // The smallest p-value the test can reach with these sizes (both samples fully separated):
+  // below alpha only with enough repetitions (5 per side at alpha 0.01).
+  std::string verdict = "unchanged";
+  if (std::fabs(change) > opt.threshold && mw.p_value < opt.alpha) verdict = change < 0 ? "regressed" : "improved";
+  else if (std::fabs(change) > opt.threshold)
+    note += std::string(note.empty() ? "" : "; ") + "beyond threshold but not significant (p=" + fmt(mw.p_value, "%.3g") + ")";
+  t["verdict"] = verdict;
+  if (!note.empty()) t["note"] = note;
+  return t;
+}
+
+json side_info(const ResultSet& s) {
+  std::set<std::string> hosts, commits, cpus;
+  for (auto& r : s.results) {
+    std::string h = str(at(r, {"context", "host"}));
+    if (!h.empty()) hosts.insert(h);
+    std::string c = str(at(r, {"context", "git_commit"}));
+    if (!c.empty()) commits.insert(c.substr(0, 12) + (at(r, {"context", "git_dirty"}) == json(true) ? "+dirty" : ""));
+    std::string cpu = str(at(r, {"context", "cpu_model"}));
+    if (!cpu.empty()) cpus.insert(cpu);
+  }
+  return {{"path", s.path}, {"results", s.results.size()}, {"hosts", hosts}, {"commits", commits}, {"cpus", cpus}};
+}
+
+/// One row: everything known about a (base, new) pair. Either may be null (missing / new).
+json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
+  const json& any = b ? *b : *n;
+  json p;
+  p["job"] = job_label(any);
+  p["method"] = str(at(any, {"job", "method"}));
+  p["params_key"] = str(at(any, {"job", "params_key"}));
+  p["mesh"] = str(at(any, {"job", "mesh", "name"}));
+  p["query_kind"] = str(at(any, {"job", "queries", "kind"}));
+  p["query"] = str(at(any, {"job", "query"}));
+  json reasons = json::array();
+  bool gates = false;
+  std::string verdict;
+  auto reason = [&](const std::string& code, const std::string& detail) {
+    reasons.push_back({{"code", code}, {"detail", detail}});
+  };
+  if (!n) {
+    verdict = "missing";
+    gates = !opt.ignore_missing;
+    reason("missing", "in BASE, not in NEW");
+  } else if (!b) {
+    verdict = "new";
+    reason("new", "in NEW, not in BASE");
+  } else {
+    const std::string sb = str(at(*b, {"status"})), sn = str(at(*n, {"status"}));
+    p["status"] = {{"base", sb}, {"new", sn}};
+    if (sb == "ok" && sn != "ok") {
+      verdict = "failed";
+      gates = true;
+      reason("failed", "status ok -> " + sn + (str(at(*n, {"message"})).empty() ? "" : ": " + str(at(*n, {"message"}))));
+    } else if (sb != "ok" && sn == "ok") {
+      verdict = "improved";
+      reason("fixed", "status " + sb + " -> ok");
+    } else if (sb != sn) {
+      verdict = "regressed";
+      gates = true;
+      reason("status_changed", "status " + sb + " -> " + sn);
+    } else if (sb != "ok") {
+      verdict = "unchanged";
+    } else {
+      // Both ok: deterministic work first, then accuracy, then timing.
+      json counters = json::array();
+      std::map<std::string, json> cb, cn;
+      flatten(at(*b, {"counters"}).is_object() ? at(*b, {"counters"}) : json::object(), "", &cb);
+      flatten(at(*n, {"counters"}).is_object() ? at(*n, {"counters"}) : json::object(), "", &cn);
+      std::set<std::string> keys;
+      for (auto& kv : cb) keys.insert(kv.first);
+      for (auto& kv : cn) keys.insert(kv.first);
+      for (auto& k : keys) {
+        json vb = cb.count(k) ? cb[k] : json(nullptr), vn = cn.count(k) ? cn[k] : json(nullptr);
+        if (!same_value(vb, vn, 0.0)) counters.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+      }
+      if (!counters.empty()) {
+        std::string d;
+        for (auto& c : counters) d += (d.empty() ? "" : ", ") + c["name"].get<std::string>() + " " + change_text(c["base"], c["new"]);
+        reason("counters_changed", d);
+        p["counters"] = counters;
+      }
+      json accuracy = json::array();
+      const json& ab = at(*b, {"accuracy"});
+      const json& an = at(*n, {"accuracy"});
+      if (ab.is_null() != an.is_null()) {
+        accuracy.push_back({{"field", "accuracy"}, {"base", ab.is_null() ? "none" : "measured"}, {"new", an.is_null() ? "none" : "measured"}});
+      } else if (!ab.is_null()) {
+        std::map<std::string, json> fb, fn;
+        flatten(ab, "", &fb);
+        flatten(an, "", &fn);
+        std::set<std::string> fk;
+        for (auto& kv : fb) fk.insert(kv.first);
+        for (auto& kv : fn) fk.insert(kv.first);
+        for (auto& k : fk) {
+          json vb = fb.count(k) ? fb[k] : json(nullptr), vn = fn.count(k) ? fn[k] : json(nullptr);
+          if (!same_value(vb, vn, opt.rtol)) accuracy.push_back({{"field", k}, {"base", vb}, {"new", vn}});
+        }
+      }
+      if (!accuracy.empty()) {
+        std::string d;
+        for (auto& a : accuracy) d += (d.empty() ? "" : ", ") + a["field"].get<std::string>() + " " + change_text(a["base"], a["new"]);
+        reason("accuracy_changed", d);
+        p["accuracy"] = accuracy;
+      }
+      const json& bb = at(*b, {"build", "structure_bytes"});
+      const json& bn = at(*n, {"build", "structure_bytes"});
+      if (bb.is_number() && bn.is_number() && bb != bn) p["structure_bytes"] = {{"base", bb}, {"new", bn}};
+
+      json t = timing_block(*b, *n, opt);
+      const std::string tv = t["verdict"];
+      p["timing"] = t;
+      const bool deterministic_change = !counters.empty() || !accuracy.empty();
+      if (tv != "unchanged") {
+        const bool tg = opt.timing_gates && tv == "regressed";
+        reason(tv == "regressed" ? "throughput_regressed" : "throughput_improved",
+               "normalised throughput " + fmt(100 * t["change"].get<double>(), "%+.1f") + "%, p=" +
+                   fmt(t["p_value"].get<double>(), "%.2g") + (tv == "regressed" && !opt.timing_gates ? " (reported, not gating)" : ""));
+        gates = gates || tg;
+      }
+      if (deterministic_change) {
+        verdict = "regressed";  // any change of deterministic work or accuracy: rebaseline or fix
+        gates = true;
+      } else {
+        verdict = tv;
+      }
+    }
+  }
+  p["verdict"] = verdict;
+  p["reasons"] = reasons;
+  p["gates"] = gates;
+  return p;
+}
+
+/// Pairs results in stages: same primary key and same job id; same primary key; same
+/// secondary key (results without hashes, such as status rows of crashed jobs).
+std::vector<std::pair<const json*, const json*>> pair_up(const ResultSet& base, const ResultSet& fresh) {
+  std::vector<bool> used_b(base.results.size()), used_n(fresh.results.size());
+  std::vector<std::pair<const json*, const json*>> pairs;
+  using KeyFn = std::string (*)(const json&);
+  const KeyFn stages[] = {
+      [](const json& r) { std::string k = primary_key(r); return k.empty() ? k : k + "#" + str(at(r, {"job", "id"})); },
+      [](const json& r) { return primary_key(r); },
+      [](const json& r) { return secondary_key(r); },
+  };
+  for (KeyFn key : stages) {
+    std::multimap<std::string, std::size_t> by_key;
+    for (std::size_t i = 0; i < fresh.results.size(); ++i)
+      if (!used_n[i]) {
+        std::string k = key(fresh.results[i]);
+        if (!k.empty()) by_key.emplace(k, i);
+      }
+    for (std::size_t i = 0; i < base.results.size(); ++i) {
+      if (used_b[i]) continue;
+      std::string k = key(base.results[i]);
+      if (k.empty()) continue;
+      auto it = by_key.find(k);
+      if (it == by_key.end()) continue;
+      pairs.push_back({&base.results[i], &fresh.results[it->second]});
+      used_b[i] = used_n[it->second] = true;
+      by_key.erase(it);
+    }
+  }
+  for (std::size_t i = 0; i < base.results.size(); ++i)
+    if (!used_b[i]) pairs.push_back({&base.results[i], nullptr});
+  for (std::size_t i = 0; i < fresh.results.size(); ++i)
+    if (!used_n[i]) pairs.push_back({nullptr, &fresh.results[i]});
+  return pairs;
+}
+
+int severity(const json& p) {
+  static const std::map<std::string, int> order = {{"failed", 0}, {"regressed", 1}, {"missing", 2},
+                                                   {"improved", 3}, {"new", 4}, {"unchanged", 5}};
+  auto it = order.find(p["verdict"].get<std::string>());
+  return (p["gates"].get<bool>() ? 0 : 10) + (it == order.end() ? 9 : it->second);
+}
+
+}  // namespace
+
+json compare_result_sets(const ResultSet& base, const ResultSet& fresh, const CompareOptions& opt) {
+  json rows = json::array();
+  for (auto& [b, n] : pair_up(base, fresh)) rows.push_back(compare_pair(b, n, opt));
+  std::stable_sort(rows.begin(), rows.end(), [](const json& a, const json& b) {
+    int sa = severity(a), sb = severity(b);
+    return sa != sb ? sa < sb : a["job"].get<std::string>() < b["job"].get<std::string>();
+  });
+  json summary = {{"failed", 0}, {"regressed", 0}, {"missing", 0}, {"improved", 0}, {"new", 0}, {"unchanged", 0}};
+  int gating = 0;
+  for (auto& r : rows) {
+    summary[r["verdict"].get<std::string>()] = summary[r["verdict"].get<std::string>()].get<int>() + 1;
+    gating += r["gates"].get<bool>() ? 1 : 0;
+  }
+  summary["gating"] = gating;
+  return {{"schema", "bvhbench.compare/1"},
+          {"base", side_info(base)},
+          {"new", side_info(fresh)},
+          {"options",
+           {{"threshold", opt.threshold},
+            {"alpha", opt.alpha},
+            {"timing", opt.timing_gates ? "gate" : "report"},
+            {"ignore_missing", opt.ignore_missing},
+            {"rtol", opt.rtol}}},
+          {"summary", summary},
+          {"pairs", rows},
+          {"exit_code", gating ? 1 : 0}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Markdown
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+std::string join(const json& arr) {
+  std::string s;
+  for (auto& v : arr) s += (s.empty() ? "" : ", ") + v.get<std::string>();
+  return s.empty() ? "?" : s;
+}
+
+std::string md_cell(std::string s) {
+  std::string o;
+  for (char c : s) o += c == '|' ? std::string("\\|") : c == '\n' ? std::string(" ") : std::string(1, c);
+  return o;
+}
+
+std::string qps_text(const json& v) {
+  return v.is_number() ? fmt(v.get<double>(), "%.4g") : std::string("-");
+}
+
+}  // namespace
+
+std::string compare_markdown(const json& rep) {
+  std::ostringstream o;
+  const json& s = rep["summary"];
+  const json& opt = rep["options"];
+  const int gating = s["gating"].get<int>();
+  o << "## bvhbench compare: " << (gating ? "REGRESSION (" + std::to_string(gating) + " gating)" : std::string("OK"))
+    << "\n\n";
+  for (const char* side : {"base", "new"}) {
+    const json& b = rep[side];
+    o << "- " << (std::string(side) == "base" ? "BASE" : "NEW") << ": `" << b["path"].get<std::string>() << "`, "
+      << b["results"].get<std::size_t>() << " results; host " << join(b["hosts"]) << "; commit " << join(b["commits"])
+      << "\n";
+  }
+  o << "- Counters, accuracy and statuses: exact (any change gates). Throughput: normalised by the "
+       "calibration kernel; a change counts when it exceeds "
+    << fmt(100 * opt["threshold"].get<double>(), "%g") << "% and a two-sided Mann-Whitney U test gives p < "
+    << fmt(opt["alpha"].get<double>(), "%g") << "; timing verdicts "
+    << (opt["timing"] == "gate" ? "gate" : "are reported only (--timing report)") << ".\n\n";
+  o << "| | verdict | job | q/s base -> new | change (normalised) | p | why |\n";
+  o << "|---|---|---|---:|---:|---:|---|\n";
+  for (auto& p : rep["pairs"]) {
+    const json& t = p.contains("timing") ? p["timing"] : json(nullptr);
+    std::string why;
+    for (auto& r : p["reasons"]) {
+      if (r["code"] == "missing" || r["code"] == "new") continue;
+      why += (why.empty() ? "" : "; ") + r["code"].get<std::string>() + ": " + r["detail"].get<std::string>();
+    }
+    if (t.is_object() && t.contains("note")) why += (why.empty() ? "" : "; ") + t["note"].get<std::string>();
+    if (why.size() > 300) why = why.substr(0, 297) + "...";
+    std::string qps = "-", change = "-", pv = "-";
+    if (t.is_object()) {
+      qps = qps_text(t["base_qps_median"]) + " -> " + qps_text(t["new_qps_median"]);
+      if (t["change"].is_number()) change = fmt(100 * t["change"].get<double>(), "%+.1f") + "%";
+      if (t["p_value"].is_number()) pv = fmt(t["p_value"].get<double>(), "%.2g");
+    }
+    o << "| " << (p["gates"].get<bool>() ? "**x**" : "") << " | " << p["verdict"].get<std::string>() << " | "
+      << md_cell(p["job"].get<std::string>()) << " | " << qps << " | " << change << " | " << pv << " | " << md_cell(why)
+      << " |\n";
+  }
+  o << "\n" << s["failed"].get<int>() << " failed, " << s["regressed"].get<int>() << " regressed, "
+    << s["missing"].get<int>() << " missing, " << s["improved"].get<int>() << " improved, " << s["new"].get<int>()
+    << " new, " << s["unchanged"].get<int>() << " unchanged; " << gating << " gating.\n";
+
+  // Full lists of what changed, for the rows above whose cells were cut short.
+  bool header = false;
+  for (auto& p : rep["pairs"]) {
+    if (!p.contains("counters") && !p.contains("accuracy")) continue;
+    if (!header) o << "\n### Changed counters and accuracy\n";
+    header = true;
+    o << "\n`" << p["job"].get<std::string>() << "`\n";
+    if (p.contains("counters"))
+      for (auto& c : p["counters"]) o << "- counter `" << c["name"].get<std::string>() << "`: " << change_text(c["base"], c["new"]) << "\n";
+    if (p.contains("accuracy"))
+      for (auto& a : p["accuracy"]) o << "- accuracy `" << a["field"].get<std::string>() << "`: " << change_text(a["base"], a["new"]) << "\n";
+  }
+  if (gating)
+    o << "\nIf these changes are intended, regenerate the baseline (docs/compare.md, `make rebaseline`) "
+         "and commit it with the change.\n";
+  return o.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+// `bvhbench compare`
+// ---------------------------------------------------------------------------------------------
 void add_compare_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("compare", "Compare a baseline with a new result set (not yet available)");
-  cmd->allow_extras();
-  cmd->callback([] { throw UnsupportedError("bvhbench compare is not implemented yet (issue 9)"); });
+  struct Opts {
+    std::string base, fresh, format = "md", timing = "gate";
+    CompareOptions c;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand("compare", "Compare a baseline with a new result set; exit 1 on a regression");
+  cmd->add_option("base", o->base, "Baseline: result folder (with runs/*.json) or one result file")->required();
+  cmd->add_option("new", o->fresh, "New results: result folder or one result file")->required();
+  cmd->add_option("--threshold", o->c.threshold, "Relative throughput change that matters (default 0.10)")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--alpha", o->c.alpha, "Significance level of the Mann-Whitney U test (default 0.01)")
+      ->check(CLI::Range(1e-12, 1.0));
+  cmd->add_option("--format", o->format, "md (Markdown table) or json")->check(CLI::IsMember({"md", "json"}));
+  cmd->add_option("--timing", o->timing, "gate (default: slower throughput fails) or report (shown, never fails)")
+      ->check(CLI::IsMember({"gate", "report"}));
+  cmd->add_flag("--ignore-missing", o->c.ignore_missing, "Jobs of BASE absent from NEW do not fail (partial runs)");
+  cmd->add_option("--rtol", o->c.rtol, "Relative tolerance for floating accuracy summaries (default 1e-12)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->callback([o] {
+    o->c.timing_gates = o->timing == "gate";
+    ResultSet base = load_result_set(o->base);
+    ResultSet fresh = load_result_set(o->fresh);
+    json rep = compare_result_sets(base, fresh, o->c);
+    if (o->format == "json") std::cout << rep.dump(2) << "\n";
+    else std::cout << compare_markdown(rep);
+    std::cout.flush();
+    if (rep["exit_code"].get<int>() != 0) throw ExitCode{rep["exit_code"].get<int>()};
+  });
 }
 
 }  // namespace bvhbench

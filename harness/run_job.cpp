@@ -15,6 +15,7 @@
 #include <tbb/global_control.h>
 
 #include "accuracy.hpp"
+#include "calibration.hpp"
 #include "commands.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
@@ -213,6 +214,7 @@ json run_job(const JobSpec& spec) {
     r["counters"] = counters;
     std::size_t query_rss = current_rss_bytes();
 
+    r["calibration"] = measure_calibration();
     // ---- throughput: `repeat` passes ----------------------------------------------------------
     std::vector<double> qps, pass_seconds;
     Progress qprog("querying " + info->name, spec.repeat + 1, spec.progress);
