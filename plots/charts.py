@@ -174,7 +174,7 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
                 ha=better_x, va=better_y, style="italic")
     if floor:
         lo = floor / 3
-        hi = max(x for _, x, _ in pts) * 3
+        hi = max(x for _, x, _ in pts) * 10   # room for the sweep labels
         for ax in axes:
             ax.set_xlim(lo, max(hi, floor * 100))
             ax.xaxis.set_major_locator(LogLocator(base=10, numticks=8))

@@ -44,17 +44,20 @@ def render_md(header, rows):
 _TEX_ESCAPES = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
                 "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
                 "^": r"\textasciicircum{}", "×": r"$\times$", "µ": r"$\mu$", "–": "--",
-                "≥": r"$\geq$", "÷": r"$\div$", "★": r"$\star$"}
+                "≥": r"$\geq$", "÷": r"$\div$", "★": r"$\star$", "≈": r"$\approx$",
+                "`": ""}
 
 
 def tex_escape(s):
     return "".join(_TEX_ESCAPES.get(ch, ch) for ch in str(s))
 
 
-def render_tex(header, rows, caption, label, bold_rows=()):
-    """A booktabs table (needs \\usepackage{booktabs}); bold_rows are row indices to embolden."""
+def render_tex(header, rows, caption, label, bold_rows=(), left_cols=3):
+    """A booktabs table (needs \\usepackage{booktabs}); bold_rows are row indices to embolden;
+    the first left_cols columns are text (left-aligned), the rest numbers."""
     out = [r"\begin{table}[htbp]", r"\centering", r"\footnotesize",
-           r"\begin{tabular}{" + "l" * 2 + "r" * (len(header) - 2) + "}", r"\toprule",
+           r"\begin{tabular}{" + "l" * left_cols + "r" * (len(header) - left_cols) + "}",
+           r"\toprule",
            " & ".join(tex_escape(h) for h in header) + r" \\", r"\midrule"]
     for i, r in enumerate(rows):
         cells = [tex_escape(c) for c in r]
@@ -311,7 +314,7 @@ def stability_cells(rs):
     """
     stress = [j for j in rs.jobs if j.mesh in rs.stress_meshes]
     out = {}
-    for query in sorted({j.query for j in stress}):
+    for query in sorted({j.query for j in stress}, key=lambda q: (q != "inside", q)):
         js = [j for j in stress if j.query == query]
         configs = sorted({j.config for j in js},
                          key=lambda c: (method_sort_key(c.split(":")[0]), c))
