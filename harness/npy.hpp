@@ -25,6 +25,11 @@ struct NpyArray {
   static NpyArray f8_n3(const std::vector<Vec3d>& v);  ///< shape (N, 3)
   static NpyArray i8(const std::vector<std::int64_t>& v);
   static NpyArray b1(const std::vector<std::uint8_t>& v);  ///< bool
+  /// A one-element NumPy unicode array ("<U{k}", k = code points, at least 1; shape (1,))
+  /// holding the UTF-8 string `s` as UTF-32LE, as NumPy stores str values.
+  static NpyArray unicode(const std::string& s);
+  /// Element i of a "<U*" array as UTF-8, trailing NUL padding dropped ("" if not unicode).
+  std::string unicode_value(std::size_t i = 0) const;
 };
 
 /// Parses .npy bytes; `name` is used in error messages. Throws InputError.
@@ -34,8 +39,8 @@ std::string npy_bytes(const NpyArray& a);
 /// Writes atomically (to PATH.tmp, then rename).
 void write_npy(const std::string& path, const NpyArray& a);
 
-/// Reads an .npz written by np.savez (stored entries; ZIP64 supported). Keys drop ".npy".
-/// Throws InputError for anything else (compressed entries included), naming the file.
+/// Reads an .npz written by np.savez (stored entries; ZIP64 supported) or np.savez_compressed
+/// (deflate). Keys drop ".npy". Throws InputError for anything else, naming the file.
 std::map<std::string, NpyArray> read_npz(const std::string& path);
 /// Writes an uncompressed .npz that np.load reads; atomically.
 void write_npz(const std::string& path, const std::map<std::string, NpyArray>& arrays);

@@ -1,0 +1,295 @@
+// .npy/.npz: round trips, files made by NumPy (tests/fixtures/npy/make_fixtures.py), malformed
+// files, and (when python3 with numpy is present) NumPy reading what we write.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "errors.hpp"
+#include "npy.hpp"
+
+using namespace bvhbench;
+
+namespace {
+
+std::string fixture(const std::string& name) { return std::string(BVHBENCH_FIXTURES_DIR) + "/npy/" + name; }
+std::string temp_path(const std::string& name) { return testing::TempDir() + "bvhbench_npy_" + name; }
+
+template <class T>
+std::vector<T> values(const NpyArray& a) {
+  std::vector<T> v(a.size());
+  if (!v.empty()) std::memcpy(v.data(), a.data.data(), v.size() * sizeof(T));
+  return v;
+}
+
+void expect_rejected(const std::function<void()>& f, const std::string& name, const std::string& problem) {
+  try {
+    f();
+    ADD_FAILURE() << name << ": no error";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(name), std::string::npos) << msg;
+    EXPECT_NE(msg.find(problem), std::string::npos) << "expected '" << problem << "' in: " << msg;
+  }
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+bool have_numpy() {
+  static const bool ok = std::system("python3 -c 'import numpy' >/dev/null 2>&1") == 0;
+  return ok;
+}
+
+/// Checks the arrays of make_fixtures.py's arrays().
+void expect_fixture_arrays(const std::map<std::string, NpyArray>& z) {
+  ASSERT_EQ(z.size(), 11u);
+  const NpyArray& f8 = z.at("f8");
+  EXPECT_EQ(f8.dtype, "<f8");
+  EXPECT_EQ(f8.shape, (std::vector<std::size_t>{2, 3}));
+  const auto v = values<double>(f8);
+  EXPECT_EQ(v[0], 0.1);
+  EXPECT_EQ(v[3], 1e300);
+  EXPECT_TRUE(std::signbit(v[4]));
+  EXPECT_EQ(v[5], 5e-324);
+  EXPECT_EQ(values<float>(z.at("f4")), (std::vector<float>{1.5f, -0.25f, 3.0f}));
+  EXPECT_EQ(values<std::int64_t>(z.at("i8")), (std::vector<std::int64_t>{-1, 0, std::int64_t(1) << 40}));
+  EXPECT_EQ(z.at("i4").dtype, "<i4");
+  EXPECT_EQ(z.at("i4").shape, (std::vector<std::size_t>{1, 2}));
+  EXPECT_EQ(values<std::int32_t>(z.at("i4")), (std::vector<std::int32_t>{-7, 8}));
+  EXPECT_EQ(values<std::uint32_t>(z.at("u4")), (std::vector<std::uint32_t>{4000000000u}));
+  EXPECT_EQ(z.at("b1").dtype, "|b1");
+  EXPECT_EQ(values<std::uint8_t>(z.at("b1")), (std::vector<std::uint8_t>{1, 0, 1}));
+  EXPECT_EQ(z.at("u1").dtype, "|u1");
+  EXPECT_EQ(values<std::uint8_t>(z.at("u1")), (std::vector<std::uint8_t>{255, 0}));
+  const NpyArray& text = z.at("text");
+  EXPECT_EQ(text.dtype, "<U4");
+  EXPECT_TRUE(text.shape.empty());
+  EXPECT_EQ(text.size(), 1u);
+  EXPECT_EQ(text.unicode_value(), "h\xc3\xa9 \xf0\x9f\x99\x82");
+  const NpyArray& words = z.at("words");
+  EXPECT_EQ(words.dtype, "<U3");
+  EXPECT_EQ(words.itemsize(), 12u);
+  EXPECT_EQ(words.unicode_value(0), "ab");
+  EXPECT_EQ(words.unicode_value(1), "cde");
+  EXPECT_EQ(values<double>(z.at("scalar")), (std::vector<double>{2.5}));
+  EXPECT_EQ(z.at("empty").shape, (std::vector<std::size_t>{0, 3}));
+  EXPECT_TRUE(z.at("empty").data.empty());
+}
+
+}  // namespace
+
+// ---- round trips ----
+
+TEST(Npy, RoundTripEveryDtype) {
+  std::vector<NpyArray> arrays = {
+      NpyArray::f8({1.0, -2.5, 1e-300}), NpyArray::f8_n3({{1, 2, 3}, {4, 5, 6}}),
+      NpyArray::i8({-5, 0, 7}),          NpyArray::b1({0, 3, 1}),
+      NpyArray::unicode("oracle v1"),    NpyArray::f8({})};
+  NpyArray u4;
+  u4.dtype = "<u4";
+  u4.shape = {2, 2};
+  u4.data.resize(16, '\x7f');
+  arrays.push_back(u4);
+  for (const NpyArray& a : arrays) {
+    SCOPED_TRACE(a.dtype);
+    const std::string path = temp_path("rt.npy");
+    write_npy(path, a);
+    const NpyArray r = read_npy(path);
+    EXPECT_EQ(r.dtype, a.dtype);
+    EXPECT_EQ(r.shape, a.shape);
+    EXPECT_EQ(r.data, a.data);
+    const std::string bytes = npy_bytes(a);
+    EXPECT_EQ(bytes, slurp(path));
+    EXPECT_EQ(bytes.size() % 64, a.data.size() % 64) << "the data is not 64-byte aligned";
+    const NpyArray p = parse_npy(bytes.data(), bytes.size(), "mem");
+    EXPECT_EQ(p.data, a.data);
+    std::remove(path.c_str());
+  }
+  EXPECT_EQ(NpyArray::b1({0, 3, 1}).data, (std::vector<char>{0, 1, 1}));
+}
+
+TEST(Npy, UnicodeHelper) {
+  const NpyArray a = NpyArray::unicode("h\xc3\xa9!");
+  EXPECT_EQ(a.dtype, "<U3");
+  EXPECT_EQ(a.shape, (std::vector<std::size_t>{1}));
+  EXPECT_EQ(a.data, (std::vector<char>{'h', 0, 0, 0, char(0xe9), 0, 0, 0, '!', 0, 0, 0}));
+  EXPECT_EQ(a.unicode_value(), "h\xc3\xa9!");
+  EXPECT_EQ(NpyArray::unicode("").dtype, "<U1");
+  EXPECT_EQ(NpyArray::unicode("").unicode_value(), "");
+  EXPECT_EQ(NpyArray::f8({1.0}).unicode_value(), "");
+}
+
+TEST(Npy, PointsRoundTrip) {
+  const std::vector<Vec3d> pts = {{0.1, 0.2, 0.3}, {-1e10, 0, 5e-324}};
+  const std::string path = temp_path("points.npy");
+  write_npy(path, NpyArray::f8_n3(pts));
+  EXPECT_EQ(read_points_npy(path), pts);
+  std::ifstream tmp(path + ".tmp");
+  EXPECT_FALSE(tmp.good()) << "the temporary file was left behind";
+  std::remove(path.c_str());
+}
+
+TEST(Npy, NpzRoundTrip) {
+  std::map<std::string, NpyArray> z;
+  z["distance"] = NpyArray::f8({1.5, -2.0});
+  z["closest"] = NpyArray::f8_n3({{1, 2, 3}, {4, 5, 6}});
+  z["triangle"] = NpyArray::i8({3, -1});
+  z["inside"] = NpyArray::b1({1, 0});
+  z["definition"] = NpyArray::unicode("generalized winding number");
+  z["empty"] = NpyArray::f8({});
+  const std::string path = temp_path("rt.npz");
+  write_npz(path, z);
+  const auto r = read_npz(path);
+  ASSERT_EQ(r.size(), z.size());
+  for (const auto& kv : z) {
+    SCOPED_TRACE(kv.first);
+    ASSERT_TRUE(r.count(kv.first));
+    EXPECT_EQ(r.at(kv.first).dtype, kv.second.dtype);
+    EXPECT_EQ(r.at(kv.first).shape, kv.second.shape);
+    EXPECT_EQ(r.at(kv.first).data, kv.second.data);
+  }
+  EXPECT_EQ(r.at("definition").unicode_value(), "generalized winding number");
+  std::remove(path.c_str());
+}
+
+TEST(Npy, NpzWithMoreThan65535EntriesUsesZip64) {
+  std::map<std::string, NpyArray> z;
+  for (int i = 0; i < 70000; ++i) z["a" + std::to_string(i)] = NpyArray::i8({i});
+  const std::string path = temp_path("many.npz");
+  write_npz(path, z);
+  const auto r = read_npz(path);
+  ASSERT_EQ(r.size(), 70000u);
+  EXPECT_EQ(values<std::int64_t>(r.at("a69999")), (std::vector<std::int64_t>{69999}));
+  if (have_numpy()) {
+    const std::string cmd = "python3 -c \"import numpy as np; z = np.load('" + path +
+                            "'); assert len(z.files) == 70000 and z['a69999'][0] == 69999\"";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+  }
+  std::remove(path.c_str());
+}
+
+// ---- NumPy interop ----
+
+TEST(NpyNumpy, ReadsNpyFiles) {
+  const std::vector<Vec3d> pts = {{0, 1, 2}, {-1.5, 0.25, 1e-3}, {3, 4, 5}, {0.1, 0.2, 0.3}};
+  EXPECT_EQ(read_points_npy(fixture("points.npy")), pts);
+  EXPECT_EQ(read_points_npy(fixture("points_v2.npy")), pts);
+  const NpyArray f4 = read_npy(fixture("points_f4.npy"));
+  EXPECT_EQ(f4.dtype, "<f4");
+  EXPECT_EQ(f4.shape, (std::vector<std::size_t>{4, 3}));
+  EXPECT_EQ(values<float>(f4)[4], 0.25f);
+  // Big-endian data is converted to the little-endian form we keep.
+  const NpyArray be = read_npy(fixture("big_endian.npy"));
+  EXPECT_EQ(be.dtype, "<f8");
+  EXPECT_EQ(values<double>(be), (std::vector<double>{1.0, -2.0, 0.5}));
+}
+
+TEST(NpyNumpy, OurNpyBytesEqualNumpys) {
+  // np.save of the same (4, 3) float64 array: identical bytes, header included.
+  const std::vector<Vec3d> pts = {{0, 1, 2}, {-1.5, 0.25, 1e-3}, {3, 4, 5}, {0.1, 0.2, 0.3}};
+  EXPECT_EQ(npy_bytes(NpyArray::f8_n3(pts)), slurp(fixture("points.npy")));
+}
+
+TEST(NpyNumpy, ReadsSavez) { expect_fixture_arrays(read_npz(fixture("savez.npz"))); }
+TEST(NpyNumpy, ReadsSavezCompressed) { expect_fixture_arrays(read_npz(fixture("savez_compressed.npz"))); }
+TEST(NpyNumpy, ReadsEntriesWithDataDescriptors) { expect_fixture_arrays(read_npz(fixture("descriptors.npz"))); }
+
+TEST(NpyNumpy, NumpyReadsOurNpz) {
+  if (!have_numpy()) GTEST_SKIP() << "python3 with numpy not available";
+  std::map<std::string, NpyArray> z;
+  z["distance"] = NpyArray::f8({1.5, -2.0});
+  z["closest"] = NpyArray::f8_n3({{1, 2, 3}, {4, 5, 6}});
+  z["triangle"] = NpyArray::i8({3, -1});
+  z["inside"] = NpyArray::b1({1, 0});
+  z["definition"] = NpyArray::unicode("winding h\xc3\xa9");
+  const std::string path = temp_path("interop.npz"), npy = temp_path("interop.npy");
+  write_npz(path, z);
+  write_npy(npy, NpyArray::f8_n3({{0.1, 0.2, 0.3}}));
+  const std::string cmd =
+      "python3 -c \"import numpy as np, zipfile; zipfile.ZipFile('" + path + "').testzip() is None or exit(3); "
+      "z = np.load('" + path + "'); "
+      "assert sorted(z.files) == ['closest', 'definition', 'distance', 'inside', 'triangle'], z.files; "
+      "assert z['distance'].tolist() == [1.5, -2.0]; "
+      "assert z['closest'].shape == (2, 3) and z['closest'][1, 2] == 6; "
+      "assert z['triangle'].dtype == np.int64 and z['triangle'].tolist() == [3, -1]; "
+      "assert z['inside'].dtype == bool and z['inside'].tolist() == [True, False]; "
+      "assert z['definition'][0] == 'winding h\\u00e9', z['definition']; "
+      "p = np.load('" + npy + "'); assert p.shape == (1, 3) and p[0, 0] == 0.1\"";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::remove(path.c_str());
+  std::remove(npy.c_str());
+}
+
+// ---- malformed ----
+
+TEST(NpyRejects, PointsWithTheWrongDtypeOrShape) {
+  expect_rejected([] { read_points_npy(fixture("points_f4.npy")); }, "points_f4.npy", "dtype <f4 and shape (4, 3)");
+  expect_rejected([] { read_points_npy(fixture("points_n4.npy")); }, "points_n4.npy", "dtype <f8 and shape (2, 4)");
+}
+TEST(NpyRejects, NanPoint) {
+  expect_rejected([] { read_points_npy(fixture("points_nan.npy")); }, "points_nan.npy", "point 1 has a NaN coordinate");
+}
+TEST(NpyRejects, FortranOrder) {
+  expect_rejected([] { read_npy(fixture("fortran.npy")); }, "fortran.npy", "fortran_order");
+}
+TEST(NpyRejects, ObjectDtype) {
+  expect_rejected([] { read_npy(fixture("object.npy")); }, "object.npy", "unsupported dtype '|O'");
+}
+TEST(NpyRejects, TruncatedNpy) {
+  expect_rejected([] { read_npy(fixture("bad_truncated.npy")); }, "bad_truncated.npy", "truncated");
+}
+TEST(NpyRejects, BadMagic) {
+  expect_rejected([] { read_npy(fixture("bad_magic.npy")); }, "bad_magic.npy", "bad magic");
+}
+TEST(NpyRejects, MissingFile) {
+  expect_rejected([] { read_npy(fixture("nope.npy")); }, "nope.npy", "not found");
+  expect_rejected([] { read_npz(fixture("nope.npz")); }, "nope.npz", "not found");
+}
+TEST(NpyRejects, TruncatedNpz) {
+  expect_rejected([] { read_npz(fixture("bad_truncated.npz")); }, "bad_truncated.npz", "truncated");
+}
+TEST(NpyRejects, CorruptNpz) {
+  expect_rejected([] { read_npz(fixture("bad_crc.npz")); }, "bad_crc.npz", "CRC-32 mismatch");
+}
+TEST(NpyRejects, NpyGivenAsNpz) {
+  expect_rejected([] { read_npz(fixture("points.npy")); }, "points.npy", "not an .npz");
+}
+TEST(NpyRejects, ParseNpyNamesTheSource) {
+  const std::string bytes = slurp(fixture("points.npy"));
+  expect_rejected([&] { parse_npy(bytes.data(), bytes.size() - 1, "the-name"); }, "the-name", "truncated");
+  expect_rejected([&] { parse_npy(bytes.data(), 5, "the-name"); }, "the-name", "truncated");
+}
+
+// Every prefix and many corruptions of NumPy-made files are rejected cleanly, never a crash.
+TEST(NpyRejects, EveryPrefixAndByteFlip) {
+  for (const char* name : {"savez.npz", "savez_compressed.npz", "points.npy"}) {
+    const std::string bytes = slurp(fixture(name));
+    const bool npz = std::string(name).find(".npz") != std::string::npos;
+    const std::string path = temp_path(npz ? "fuzz.npz" : "fuzz.npy");
+    auto attempt = [&](const std::string& b) {
+      std::ofstream(path, std::ios::binary).write(b.data(), std::streamsize(b.size()));
+      try {
+        if (npz) read_npz(path); else read_npy(path);
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      }
+    };
+    for (std::size_t n = 0; n < bytes.size(); n += 7) attempt(bytes.substr(0, n));
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+      std::string b = bytes;
+      b[i] = char(b[i] ^ 0x5a);
+      attempt(b);
+    }
+    std::remove(path.c_str());
+  }
+}
