@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -204,9 +205,19 @@ std::string fmt(double v, const char* f = "%.6g") {
   return buf;
 }
 
+/// The shortest decimal that reads back as the same double: exact, and readable.
+std::string shortest(double v) {
+  for (int prec = 6; prec < 17; ++prec) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+    if (std::strtod(buf, nullptr) == v) return buf;
+  }
+  return fmt(v, "%.17g");
+}
+
 std::string show(const json& v) {
   if (v.is_null()) return "(none)";
-  if (v.is_number_float()) return fmt(v.get<double>(), "%.17g");
+  if (v.is_number_float()) return shortest(v.get<double>());
   return v.dump();
 }
 
@@ -581,9 +592,11 @@ std::string compare_markdown(const json& rep) {
     const json& t = p.contains("timing") ? p["timing"] : json(nullptr);
     std::string why;
     for (auto& r : p["reasons"]) {
-      if (r["code"] == "missing" || r["code"] == "new") continue;
-      why += (why.empty() ? "" : "; ") + r["code"].get<std::string>() + ": " + r["detail"].get<std::string>();
+      if (r["code"] == "missing" || r["code"] == "new") why += r["detail"].get<std::string>();
+      else why += (why.empty() ? "" : "; ") + r["code"].get<std::string>() + ": " + r["detail"].get<std::string>();
     }
+    if (why.empty() && p.contains("status") && p["status"]["new"] != "ok")
+      why = "status " + p["status"]["new"].get<std::string>() + " (as in BASE)";
     if (t.is_object() && t.contains("note")) why += (why.empty() ? "" : "; ") + t["note"].get<std::string>();
     if (why.size() > 300) why = why.substr(0, 297) + "...";
     std::string qps = "-", change = "-", pv = "-";
