@@ -388,6 +388,24 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
   } else {
     const std::string sb = str(at(*b, {"status"})), sn = str(at(*n, {"status"}));
     p["status"] = {{"base", sb}, {"new", sn}};
+    // Paired by job id although the inputs differ (a query generator, a mesh file or a default
+    // parameter changed): the deterministic figures cannot be compared, the baseline is stale.
+    std::string inputs;
+    auto differs = [&](std::initializer_list<const char*> path, const char* what, bool both_ok_only) {
+      const json& x = at(*b, path);
+      const json& y = at(*n, path);
+      if (both_ok_only && (sb != "ok" || sn != "ok")) return;  // status rows carry unresolved params
+      if (x.is_null() || y.is_null() || x == y) return;
+      inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " +
+                (x.is_string() ? x.get<std::string>().substr(0, 16) : x.dump()) + " -> " +
+                (y.is_string() ? y.get<std::string>().substr(0, 16) : y.dump());
+    };
+    differs({"job", "mesh", "sha256"}, "mesh sha256", false);
+    differs({"job", "queries", "sha256"}, "query-set sha256", false);
+    differs({"job", "method"}, "method", true);
+    differs({"job", "params"}, "params", true);
+    differs({"job", "query"}, "query", false);
+    if (!inputs.empty()) reason("inputs_changed", inputs);
     if (sb == "ok" && sn != "ok") {
       verdict = "failed";
       gates = true;
@@ -465,6 +483,10 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
         verdict = tv;
       }
     }
+  }
+  if (!reasons.empty() && reasons[0]["code"] == "inputs_changed") {
+    gates = true;
+    if (verdict == "unchanged" || verdict == "improved") verdict = "regressed";
   }
   p["verdict"] = verdict;
   p["reasons"] = reasons;
@@ -647,9 +669,12 @@ void add_compare_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--alpha", o->c.alpha, "Significance level of the Mann-Whitney U test (default 0.01)")
       ->check(CLI::Range(1e-12, 1.0));
-  cmd->add_option("--format", o->format, "md (Markdown table) or json")->check(CLI::IsMember({"md", "json"}));
+  cmd->add_option("--format", o->format, "md (Markdown table) or json")
+      ->check(CLI::IsMember({"md", "json"}))
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cmd->add_option("--timing", o->timing, "gate (default: slower throughput fails) or report (shown, never fails)")
-      ->check(CLI::IsMember({"gate", "report"}));
+      ->check(CLI::IsMember({"gate", "report"}))
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // scripts append to CI's defaults
   cmd->add_flag("--ignore-missing", o->c.ignore_missing, "Jobs of BASE absent from NEW do not fail (partial runs)");
   cmd->add_option("--rtol", o->c.rtol, "Relative tolerance for floating accuracy summaries (default 1e-12)")
       ->check(CLI::Range(0.0, 1.0));

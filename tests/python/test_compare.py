@@ -433,3 +433,32 @@ def test_bad_usage_exit_2(tmp_path):
     assert compare(b, b, "--format", "xml").returncode == 2
     assert compare(b, b, "--timing", "sometimes").returncode == 2
     assert subprocess.run([str(EXE), "compare", str(b)], capture_output=True).returncode == 2
+
+
+# ---- pairing ---------------------------------------------------------------------------------------
+
+def test_changed_query_set_pairs_by_job_id_and_gates(tmp_path):
+    # Same job, but the query generator now makes other points: the baseline is stale.
+    b = write_set(tmp_path / "base", base_set())
+    new = base_set()
+    for r in new:
+        if r["job"]["id"] == ID_EBP_HAPTIC_DIST:
+            r["job"]["queries"]["sha256"] = "d4" * 32
+    n = write_set(tmp_path / "new", new)
+    code, rep = compare_json(b, n, "--timing", "report")
+    assert code == 1
+    row = pair(rep, ID_EBP_HAPTIC_DIST)
+    assert row["verdict"] == "regressed" and row["reasons"][0]["code"] == "inputs_changed"
+    assert rep["summary"]["missing"] == 0 and rep["summary"]["new"] == 0
+
+
+def test_same_job_under_another_id_pairs_by_content(tmp_path):
+    # Pairing is by method, resolved params, mesh and query-set hashes, query: not by file name.
+    b = write_set(tmp_path / "base", base_set())
+    new = base_set()
+    for r in new:
+        r["job"]["id"] = r["job"]["id"].replace("cow__", "cow-renamed__")
+        r["job"]["mesh"]["name"] = "cow-renamed"
+    n = write_set(tmp_path / "new", new)
+    code, rep = compare_json(b, n)
+    assert code == 0 and rep["summary"]["unchanged"] == 8

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# The CI regression gate (docs/compare.md).
+#
+#   tools/ci_gate.sh                 run suites/ci.yml into results/ci-latest/ and compare it with
+#                                    the committed baseline results/baseline/ (--timing report)
+#   tools/ci_gate.sh --rebaseline    regenerate results/baseline/ on purpose (then commit it)
+#   tools/ci_gate.sh -- ARGS...      extra arguments for `bvhbench compare` (e.g. --timing gate on a
+#                                    dedicated machine; the last --timing given wins)
+#
+# Environment: BVHBENCH_EXE (default build/bvhbench), CI_GATE_OUT (default results/ci-latest).
+# Exit: 0 nothing gating changed; 1 counters, accuracy or statuses changed (or a job is missing);
+#       2 a broken run (no binary, no baseline, the suite or compare could not read its input).
+set -uo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+EXE="${BVHBENCH_EXE:-$ROOT/build/bvhbench}"
+SUITE="$ROOT/suites/ci.yml"
+BASE="$ROOT/results/baseline"
+OUT="${CI_GATE_OUT:-$ROOT/results/ci-latest}"
+
+mode=gate
+compare_args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --rebaseline) mode=rebaseline ;;
+    --) shift; compare_args=("$@"); break ;;
+    -h|--help) sed -n '2,15p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    *) echo "ci_gate: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+  shift
+done
+
+if [ ! -x "$EXE" ]; then
+  echo "ci_gate: no bvhbench binary at $EXE (build it, or set BVHBENCH_EXE)" >&2
+  exit 2
+fi
+
+run_suite() {  # run_suite OUT_DIR: a fresh run (query sets and oracles are made again, too)
+  rm -rf "$1"
+  local t0=$SECONDS
+  "$EXE" suite "$SUITE" --out "$1"
+  local rc=$?
+  if [ $rc -ne 0 ]; then
+    echo "ci_gate: the CI suite did not run (exit $rc): see the messages above" >&2
+    exit 2
+  fi
+  echo "ci_gate: CI suite took $((SECONDS - t0)) s" >&2
+}
+
+if [ "$mode" = rebaseline ]; then
+  echo "ci_gate: regenerating the baseline in $BASE" >&2
+  run_suite "$BASE"
+  echo
+  echo "Baseline regenerated: $BASE ($(ls "$BASE/runs" | wc -l) results)."
+  echo "Review what changed, then commit it with the change that made it:"
+  echo "  git diff --stat -- results/baseline"
+  echo "  git add results/baseline/runs results/baseline/summary.csv results/baseline/suite.yml"
+  echo "  git commit -m \"rebaseline: <why>\" -- results/baseline"
+  exit 0
+fi
+
+if [ ! -d "$BASE/runs" ]; then
+  echo "ci_gate: no baseline in $BASE/runs: run 'make rebaseline' and commit results/baseline/" >&2
+  exit 2
+fi
+if [ -f "$BASE/suite.yml" ] && ! cmp -s "$BASE/suite.yml" "$SUITE"; then
+  echo "ci_gate: note: suites/ci.yml changed since the baseline was made (expect new/missing jobs)" >&2
+fi
+
+run_suite "$OUT"
+"$EXE" compare "$BASE" "$OUT" --timing report --format json "${compare_args[@]}" > "$OUT/compare.json"
+"$EXE" compare "$BASE" "$OUT" --timing report "${compare_args[@]}" | tee "$OUT/compare.md"
+rc=${PIPESTATUS[0]}
+case $rc in
+  0) echo "ci_gate: OK: counters, accuracy and statuses match the baseline (timings reported only)." ;;
+  1) echo
+     echo "ci_gate: FAILED: the results differ from the committed baseline (see the table above)."
+     echo "ci_gate: if the change is intended (a new method, a better traversal, a fixed answer), run"
+     echo "ci_gate:   make rebaseline"
+     echo "ci_gate: and commit results/baseline/ together with your change." ;;
+  *) echo "ci_gate: compare could not read the results (exit $rc): a broken run, not a regression." >&2 ;;
+esac
+exit $rc
