@@ -538,7 +538,7 @@ class PlyReader {
     if (&el == vertex_ && !el.has_list()) {
       // Fixed stride: whole batches straight from the buffer.
       const std::size_t stride = el.min_bytes();
-      int off[3];
+      int off[3] = {0, 0, 0};
       std::size_t o = 0;
       for (std::size_t i = 0; i < el.props.size(); ++i) {
         for (int k = 0; k < 3; ++k)
@@ -764,9 +764,11 @@ class ObjReader {
         }
         ln = joined;
       }
+      const std::size_t hash = ln.find('#');  // comments, also after a statement
+      if (hash != std::string_view::npos) ln = ln.substr(0, hash);
       std::string_view rest = ln;
       const std::string_view kw = next_token(rest);
-      if (kw.empty() || kw[0] == '#') continue;
+      if (kw.empty()) continue;
       auto where = [&]() { return "line " + std::to_string(line_no) + ": "; };
       if (kw == "v") {
         double c[3];
