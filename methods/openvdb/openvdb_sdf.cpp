@@ -99,7 +99,7 @@ class OpenVdbSdf final : public Method {
         closest_steps_(int(p.get_int("closest_steps"))),
         keep_index_(p.get_bool("closest_triangle")),
         renormalize_(p.get_bool("renormalize")),
-        remove_intersecting_(p.get_bool("remove_intersecting")),
+        remove_intersecting_(p.get_bool("isect_cleanup")),
         max_voxels_(double(p.get_int("max_voxels"))),
         threads_(int(p.get_int("threads"))) {}
 
@@ -413,7 +413,7 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       {"closest_steps", ParamType::integer, "2", "gradient projections toward the surface for the closest point", {}, 0, 16},
       {"closest_triangle", ParamType::boolean, "true", "keep the polygon-index grid (distance jobs) to report the closest triangle", {}},
       {"renormalize", ParamType::boolean, "true", "meshToVolume renormalisation (off: DISABLE_RENORMALIZATION)", {}},
-      {"remove_intersecting", ParamType::boolean, "true",
+      {"isect_cleanup", ParamType::boolean, "true",
        "meshToVolume removal of self-intersection voxels (off: DISABLE_INTERSECTING_VOXEL_REMOVAL)", {}},
       {"max_voxels", ParamType::integer, "300000000", "refuse a build whose estimated stored voxel count exceeds this", {}, 1, 1e15},
       {"threads", ParamType::integer, "0", "build threads; 0 = the job's --threads (a value can only lower it)", {}, 0, 1024},
