@@ -221,10 +221,10 @@ class Embree final : public Method {
     s.triangles = triangles_.data();
     s.p = p;
     const Vec3f pf(p);
-    // Float rounding of the query point, plus Embree's float box arithmetic at this magnitude.
-    s.margin = norm(Vec3d(pf) - p) +
-               4.0 * std::numeric_limits<float>::epsilon() *
-                   (magnitude_ + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
+    // Float rounding of the query point (|pf - p| <= sqrt(3) 2^-24 max|p_i|) plus Embree's float
+    // box arithmetic at the scene's magnitude: a few float epsilons of the largest coordinate.
+    s.margin = 4.0 * std::numeric_limits<float>::epsilon() *
+               (magnitude_ + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
     const float seeded = (opt_.coherent && has_prev_) ? search_radius(norm(p - prev_closest_), s.margin)
                                                       : std::numeric_limits<float>::infinity();
     point_query(s, pf, seeded);
