@@ -354,7 +354,7 @@ def latency_haptic(rs):
         raise NoData("no ok job on a haptic path records latency percentiles")
     panels = sorted({(j.query, j.mesh) for j in jobs},
                     key=lambda p: (p[0] != "inside", -(rs.mesh_triangles(p[1]) or 0)))
-    # Largest models first, at most 3 per query kind.
+    # At most the 3 largest models per query kind, then drawn smallest first.
     per_q = {}
     panels = [p for p in panels if per_q.setdefault(p[0], []).append(p) or
               len(per_q[p[0]]) <= 3]
@@ -366,34 +366,36 @@ def latency_haptic(rs):
     for ax, (query, mesh) in zip(axes, panels):
         here = sorted([j for j in jobs if j.query == query and j.mesh == mesh],
                       key=lambda j: method_sort_key(j.method))
-        handles = []
+        handles, all_x = [], []
         for j in here:
             n = j.n_queries
             xs, ys = [], []
             for key, share in PERCENTILES:
                 v = j.num("queries.latency_ns." + key)
-                if v:
+                if v and v > 0:
                     xs.append(v)
                     ys.append(share)
             vmax = j.num("queries.latency_ns.max")
-            if vmax and n:
+            if vmax and vmax > 0 and n:
                 xs.append(vmax)
                 ys.append(1.0 / n)
+            all_x += xs
             c, mk = method_color(j.method), method_marker(j.method)
             ax.plot(xs, ys, color=c, marker=mk, linestyle=":", linewidth=1.2, markersize=6)
             over = j.num("queries.over_deadline")
             share = f"{100.0 * over / n:.2g}%" if over is not None and n else "unknown"
             handles.append(Line2D([], [], color=c, marker=mk, linestyle=":",
                                   label=f"{j.method}: {share}"))
-        deadline = j.num("queries.deadline_ns") or HAPTIC_DEADLINE_NS
+        deadline = next((j.num("queries.deadline_ns") for j in here
+                         if (j.num("queries.deadline_ns") or 0) > 0), HAPTIC_DEADLINE_NS)
         ax.axvline(deadline, color="black", linestyle="--", linewidth=1)
-        ax.text(deadline, 0.98, " 1 ms deadline", transform=ax.get_xaxis_transform(),
-                fontsize=7, va="top", ha="left")
+        ax.text(deadline, 0.98, f" {fmt.duration_ns(deadline)} deadline",
+                transform=ax.get_xaxis_transform(), fontsize=7, va="top", ha="left")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        lo = min(min(l.get_xdata()) for l in ax.get_lines() if len(l.get_xdata()) > 1
-                 and l.get_linestyle() == ":") if here else 1e2
-        ax.set_xlim(lo / 2, max(deadline * 5, ax.get_xlim()[1]))
+        lo = min(all_x) if all_x else deadline / 100
+        hi = max(all_x + [deadline * 5])
+        ax.set_xlim(lo / 2, hi * 1.5)
         ax.axvspan(deadline, ax.get_xlim()[1], color="#fde0dd", zorder=0)
         ax.set_ylim(y_lo, 1.0)
         ax.set_yticks([t for t in (0.5, 0.1, 0.01, 1e-3, 1e-4, 1e-5, 1e-6) if t >= y_lo])
@@ -409,7 +411,7 @@ def latency_haptic(rs):
         ax.set_title(_mesh_title(rs, mesh, f"{query}, haptic path"), fontsize=9)
         # Beside the panel, not on it: the tail points are what the chart is for.
         ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                  frameon=False, title="share > 1 ms", title_fontsize=7)
+                  frameon=False, title=f"share > {fmt.duration_ns(deadline)}", title_fontsize=7)
     note = ("Points: p50, p99, p99.9 and max (at 1/n) of one replay; dotted lines only join "
             "them. Shaded: beyond the 1 ms haptic deadline.")
     return _finish(fig, [], None, note)

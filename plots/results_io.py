@@ -35,7 +35,16 @@ def dig(d, path, default=None):
     return cur
 
 
+def as_str(x, default=""):
+    """A text field; anything else (null, number, object) becomes the default or its str()."""
+    if x is None or isinstance(x, (dict, list)):
+        return default
+    return str(x)
+
+
 def as_float(x):
+    if isinstance(x, bool):
+        return None
     try:
         v = float(x)
     except (TypeError, ValueError):
@@ -59,17 +68,18 @@ class Job:
     # --- identity -------------------------------------------------------------------------
     @property
     def id(self):
-        return self.get("job.id") or os.path.splitext(os.path.basename(self.path))[0]
+        return as_str(self.get("job.id")) or os.path.splitext(os.path.basename(self.path))[0]
 
     @property
     def method(self):
-        return self.get("job.method") or str(self.get("job.method_spec", "?")).split(":")[0]
+        return (as_str(self.get("job.method"))
+                or as_str(self.get("job.method_spec"), "?").split(":")[0] or "?")
 
     @property
     def params_key(self):
         key = self.get("job.params_key")
-        if key is None:
-            spec = self.get("job.method_spec", "")
+        if not isinstance(key, str):
+            spec = as_str(self.get("job.method_spec"))
             key = spec.split(":", 1)[1] if ":" in spec else ""
         return key
 
@@ -80,18 +90,18 @@ class Job:
 
     @property
     def query(self):
-        return self.get("job.query", "?")
+        return as_str(self.get("job.query"), "?") or "?"
 
     @property
     def kind(self):
-        return self.get("job.queries.kind", "?")
+        return as_str(self.get("job.queries.kind"), "?") or "?"
 
     @property
     def mesh(self):
-        name = self.get("job.mesh.name")
+        name = as_str(self.get("job.mesh.name"))
         if name:
             return name
-        path = self.get("job.mesh.path", "?")
+        path = as_str(self.get("job.mesh.path"), "?") or "?"
         return os.path.splitext(os.path.basename(path))[0]
 
     @property
@@ -100,7 +110,7 @@ class Job:
 
     @property
     def status(self):
-        return self.get("status", "error")
+        return as_str(self.get("status"), "error") or "error"
 
     @property
     def ok(self):
@@ -108,7 +118,7 @@ class Job:
 
     @property
     def message(self):
-        return self.get("message", "") or ""
+        return as_str(self.get("message"))
 
     # --- measurements (None when absent) --------------------------------------------------
     @property
@@ -220,8 +230,9 @@ class ResultSet:
         """Distinct (machine, run) contexts, most common first, with their job counts."""
         counts = OrderedDict()
         for j in self.jobs:
-            ctx = j.get("context", {}) or {}
-            key = tuple(str(ctx.get(k, "")) for k in CONTEXT_KEYS)
+            ctx = j.get("context")
+            ctx = ctx if isinstance(ctx, dict) else {}
+            key = tuple(as_str(ctx.get(k)) for k in CONTEXT_KEYS)
             counts[key] = counts.get(key, 0) + 1
         out = [dict(zip(CONTEXT_KEYS, k), jobs=n) for k, n in counts.items()]
         return sorted(out, key=lambda c: -c["jobs"])
