@@ -427,9 +427,11 @@ def stability_matrix(rs):
     queries = sorted(data, key=lambda q: (q != "inside", q))
     n_cfg = max(len(data[q][0]) for q in queries)
     n_mesh = max(len(data[q][1]) for q in queries)
-    w = max(4.0, 0.9 * n_mesh + 2.8)
-    fig, axes = plt.subplots(1, len(queries), squeeze=False, dpi=DPI,
-                             figsize=(w * len(queries) + 2.2, 0.45 * n_cfg + 2.6))
+    # One panel per query kind, stacked: stability suites have many stress cases (columns).
+    fig, axes = plt.subplots(len(queries), 1, squeeze=False, dpi=DPI,
+                             figsize=(max(4.0, 0.85 * n_mesh + 2.8) + 2.2,
+                                      (0.42 * n_cfg + 2.4) * len(queries)))
+    axes = axes.T
     cmap = ListedColormap([STATUS_COLORS[s] for s in STATUS_SEVERITY])
     used = set()
     for ax, query in zip(axes[0], queries):
