@@ -22,10 +22,13 @@ struct Answers {
   void write_npz(const std::string& path) const;
 };
 
-/// The `accuracy` block from a method's answers and an oracle file (`bvhbench truth`).
-/// `diagonal` is the mesh's bounding-box diagonal (near-surface threshold and relative errors).
-/// Throws InputError if the oracle file is malformed or does not match the query set.
+/// The `accuracy` block (docs/results.md) from a method's answers and an oracle file
+/// (`bvhbench truth`). `diagonal` is the mesh's bounding-box diagonal (near-surface threshold and
+/// relative errors). `queries_sha256` / `mesh_sha256`, when given, must match the ones the oracle
+/// recorded. Throws InputError if the oracle file is malformed or belongs to another query set or
+/// mesh. Wrong, NaN or infinite answers never throw: they are what the block measures.
 nlohmann::json compute_accuracy(const Answers& answers, const std::string& truth_path,
-                                double diagonal);
+                                double diagonal, const std::string& queries_sha256 = "",
+                                const std::string& mesh_sha256 = "");
 
 }  // namespace bvhbench
