@@ -1,0 +1,190 @@
+// Out-of-core queries. Inside: the pinned top tree is descended with exactly the arithmetic of
+// ebp::Query::locate; a white/black top node answers at once, a page root hands the point to the
+// page's own ebp::Query (the page is an Octree in the global frame, so the same leaf is reached
+// by the same computation). Distance: branch and bound over the top tree, pages visited nearest
+// bound first and skipped when their bound exceeds the best distance so far; each page returns
+// its lexicographic minimum (squared distance, input triangle index), the minimum of those is
+// the in-memory answer (which is the lexicographic minimum over all triangles, whatever the
+// visiting order), bit for bit.
+#include "ebp_ooc.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ebp {
+
+OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold)
+    : store_(std::make_unique<StoreReader>(path)),
+      cache_(*store_, cache_bytes, coherent),
+      coherent_(coherent),
+      cold_(cold) {
+  const FileHeader& h = store_->header();
+  top_ = store_->top_nodes().data();
+  top_children_ = store_->top_children().data();
+  top_planes_ = store_->top_planes().data();
+  root_lo_ = Vec3d(h.root_lo[0], h.root_lo[1], h.root_lo[2]);
+  root_size_ = h.root_size;
+  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;
+  leaf_level_ = int(h.leaf_level);
+  page_stamp_.assign(store_->directory().size(), 0);
+  if (cold_) store_->drop_os_cache();
+}
+
+void OutOfCore::reset_path() {
+  last_page_ = UINT32_MAX;
+  if (cold_) {
+    cache_.clear();
+    store_->drop_os_cache();
+  }
+  // The page queries' own path state: they keep it only while resident, and a stale leaf or
+  // triangle of a page is still a valid hint for that page (answers do not depend on it).
+}
+
+QueryCounters OutOfCore::counters() const {
+  QueryCounters c = cache_.query_counters();
+  add_counters(c, top_counters_);
+  return c;
+}
+
+void OutOfCore::reset_counters() {
+  cache_.reset_counters();
+  top_counters_ = {};
+}
+
+std::size_t OutOfCore::bytes() const {
+  return sizeof(*this) + store_->pinned_bytes() + cache_.bookkeeping_bytes() + page_stamp_.capacity() * 4 +
+         cache_.resident_bytes();
+}
+
+bool OutOfCore::inside(const Vec3d& p) {
+  // Same arithmetic as Query::locate.
+  const int L = leaf_level_;
+  const double inv = double(std::uint64_t(1) << L) / root_size_;
+  const double G = double(std::uint64_t(1) << L);
+  const double rx = (p.x - root_lo_.x) * inv, ry = (p.y - root_lo_.y) * inv, rz = (p.z - root_lo_.z) * inv;
+  if (!(rx >= 0 && ry >= 0 && rz >= 0 && rx <= G && ry <= G && rz <= G)) {
+    ++top_counters_.hit_white;
+    return false;
+  }
+  const std::uint32_t gmax = (1u << L) - 1;
+  const std::uint32_t x = std::min(std::uint32_t(rx), gmax), y = std::min(std::uint32_t(ry), gmax),
+                      z = std::min(std::uint32_t(rz), gmax);
+  std::uint32_t i = 0;
+  int level = 0;
+  while (top_[i].kind == TopKind::inner) {
+    const int shift = L - level - 1;
+    const std::uint32_t o = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+    i = top_children_[top_[i].index + o];
+    ++level;
+    ++top_counters_.nodes_visited;
+  }
+  switch (top_[i].kind) {
+    case TopKind::white: ++top_counters_.hit_white; return false;
+    case TopKind::black: ++top_counters_.hit_black; return true;
+    default: break;
+  }
+  return cache_.get(top_[i].index).query->inside(p);
+}
+
+namespace {
+struct TopItem {
+  Vec3d lo;
+  double bound;
+  std::uint32_t node;
+  int level;
+};
+}  // namespace
+
+DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
+  if (++query_id_ == 0) {
+    std::fill(page_stamp_.begin(), page_stamp_.end(), 0u);
+    query_id_ = 1;
+  }
+  const std::uint32_t qid = query_id_;
+  double best2 = std::numeric_limits<double>::infinity(), best = best2;
+  std::uint32_t best_tri = UINT32_MAX, best_page = UINT32_MAX;
+  DistanceAnswer ans;
+
+  auto visit_page = [&](std::uint32_t id) {
+    if (page_stamp_[id] == qid) return;
+    page_stamp_[id] = qid;
+    PageCache::Entry& e = cache_.get(id);
+    const DistanceAnswer a = e.query->unsigned_distance(p);
+    if (a.triangle < 0) return;
+    const std::uint32_t g = e.page->global_tri[std::size_t(a.triangle)];
+    const double d2 = squared_norm(a.closest - p);  // the very expression the page query minimised
+    if (d2 < best2 || (d2 == best2 && g < best_tri)) {
+      best2 = d2;
+      best = a.distance;
+      best_tri = g;
+      best_page = id;
+      ans = a;
+      ans.triangle = std::int64_t(g);
+    }
+  };
+  if (coherent_ && last_page_ != UINT32_MAX) visit_page(last_page_);
+
+  const Vec3d pr = p - root_centre_;
+  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
+  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size_);
+  auto lower_bound = [&](const TopNode& nd, const Vec3d& lo, double size) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+      d2 += v * v;
+    }
+    const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = top_planes_ + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
+      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    top_counters_.planes_tested += nd.plane_count;
+    return std::max(b, double(m) - slack);
+  };
+
+  TopItem stack[8 * (kMaxLevel + 2)];
+  int sp = 0;
+  stack[sp++] = {root_lo_, lower_bound(top_[0], root_lo_, root_size_), 0u, 0};
+  while (sp > 0) {
+    const TopItem it = stack[--sp];
+    if (it.bound > best) continue;
+    const TopNode& nd = top_[it.node];
+    ++top_counters_.nodes_visited;
+    if (nd.kind == TopKind::page) {
+      visit_page(nd.index);
+      continue;
+    }
+    if (nd.kind != TopKind::inner) continue;
+    const int cl = it.level + 1;
+    const double csz = root_size_ / double(std::uint64_t(1) << cl);
+    TopItem kids[8];
+    int nk = 0;
+    for (int o = 0; o < 8; ++o) {
+      const std::uint32_t ci = top_children_[nd.index + std::uint32_t(o)];
+      const TopNode& cn = top_[ci];
+      if (cn.kind == TopKind::white || cn.kind == TopKind::black) continue;
+      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+      const double b = lower_bound(cn, lo, csz);
+      if (b > best) continue;
+      kids[nk++] = {lo, b, ci, cl};
+    }
+    for (int a = 1; a < nk; ++a) {  // descending bound: nearest popped first
+      TopItem x = kids[a];
+      int b = a - 1;
+      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+      kids[b + 1] = x;
+    }
+    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+  }
+  if (coherent_) last_page_ = best_page;
+  return ans;
+}
+
+DistanceAnswer OutOfCore::distance(const Vec3d& p) {
+  DistanceAnswer r = unsigned_distance(p);
+  if (inside(p)) r.distance = -r.distance;
+  return r;
+}
+
+}  // namespace ebp

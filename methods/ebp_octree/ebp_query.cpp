@@ -1,0 +1,304 @@
+// EBP-Octree queries: point location by octcode descent, exact point-in-solid in grey leaves by
+// signed segment crossings (winding number) from the leaf's reference point, branch-and-bound distance with the bounding
+// planes as lower bounds. No allocation per query.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ebp_octree.hpp"
+#include "predicates.hpp"
+
+namespace ebp {
+
+namespace {
+inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
+}  // namespace
+
+Query::Query(const Octree& tree, bool coherent)
+    : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0) {}
+
+void Query::reset_path() {
+  last_node_ = UINT32_MAX;
+  last_tri_ = UINT32_MAX;
+}
+
+std::uint32_t Query::locate(const Vec3d& p, bool* outside_root) {
+  const double inv = double(std::uint64_t(1) << t_.leaf_level) / t_.root_size;
+  const double G = double(std::uint64_t(1) << t_.leaf_level);
+  const double rx = (p.x - t_.root_lo.x) * inv, ry = (p.y - t_.root_lo.y) * inv, rz = (p.z - t_.root_lo.z) * inv;
+  if (!(rx >= 0 && ry >= 0 && rz >= 0 && rx <= G && ry <= G && rz <= G)) {
+    *outside_root = true;
+    return UINT32_MAX;
+  }
+  *outside_root = false;
+  const std::uint32_t gmax = (1u << t_.leaf_level) - 1;
+  const std::uint32_t x = std::min(std::uint32_t(rx), gmax), y = std::min(std::uint32_t(ry), gmax),
+                      z = std::min(std::uint32_t(rz), gmax);
+  if (coherent_ && last_node_ != UINT32_MAX) {
+    const int sh = t_.leaf_level - last_level_;
+    if ((x >> sh) == last_cell_[0] && (y >> sh) == last_cell_[1] && (z >> sh) == last_cell_[2]) {
+      ++counters.nodes_visited;
+      return last_node_;
+    }
+  }
+  std::uint32_t i = 0;
+  const Node* nodes = t_.nodes.data();
+  const std::uint32_t* ch = t_.children.data();
+  int level = 0;
+  ++counters.nodes_visited;
+  while (nodes[i].kind == NodeKind::inner) {
+    const int shift = t_.leaf_level - level - 1;
+    const std::uint32_t o = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+    i = ch[nodes[i].index + o];
+    ++level;
+    ++counters.nodes_visited;
+  }
+  if (coherent_) {
+    last_node_ = i;
+    last_level_ = level;
+    const int sh = t_.leaf_level - level;
+    last_cell_[0] = x >> sh;
+    last_cell_[1] = y >> sh;
+    last_cell_[2] = z >> sh;
+  }
+  return i;
+}
+
+bool Query::inside(const Vec3d& p) {
+  bool outside_root;
+  const std::uint32_t i = locate(p, &outside_root);
+  if (outside_root) {
+    ++counters.hit_white;
+    return false;
+  }
+  const Node& nd = t_.nodes[i];
+  switch (nd.kind) {
+    case NodeKind::white: ++counters.hit_white; return false;
+    case NodeKind::black: ++counters.hit_black; return true;
+    default: break;
+  }
+  switch (nd.config) {
+    case LeafConfig::convex: ++counters.hit_convex; break;
+    case LeafConfig::concave: ++counters.hit_concave; break;
+    default: ++counters.hit_special; break;
+  }
+  return classify_leaf(p, t_.leaves[nd.index]);
+}
+
+namespace {
+
+/// Winding-number change w(p) - w(q) along q -> p over the leaf's triangles. `q_side(k)` gives
+/// the exact side (+1 / -1, never 0) of q for triangle k. The float planes filter p's side; ties
+/// go to the exact predicate. Returns false when p is on a triangle (*on_surface) or the segment
+/// is degenerate (through an edge or a vertex).
+template <class QSide>
+bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
+                  QSide&& q_side, QueryCounters& cnt, int* delta, bool* on_surface) {
+  const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+              pz = float(p.z - double(lf.centre[2]));
+  const float eps = lf.eps;
+  int w = 0;
+  cnt.planes_tested += n;
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const LeafTri& t = blk[k];
+    if (t.flags & kDegenerate) continue;
+    const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    const int sq = q_side(k);
+    int sp;
+    if (s > eps) sp = 1;
+    else if (s < -eps) sp = -1;
+    else sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+    if (sp == sq) continue;
+    ++cnt.triangles_tested;
+    switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
+      case Cross::none: break;
+      case Cross::proper: w += sq > 0 ? 1 : -1; break;  // q outer -> p inner: entering
+      case Cross::on_p: *on_surface = true; return false;
+      case Cross::degenerate: return false;
+    }
+  }
+  *delta = w;
+  return true;
+}
+
+}  // namespace
+
+bool Query::classify_leaf(const Vec3d& p, const Leaf& lf) {
+  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
+  const std::uint32_t n = lf.tri_count;
+  const Vec3d ref = to_d(lf.ref);
+  bool on_surface = false;
+  int delta;
+  if (lf.ref_valid) {
+    if (leaf_winding(p, ref, blk, n, lf, [&](std::uint32_t k) { return (blk[k].flags & kRefPositive) ? 1 : -1; },
+                     counters, &delta, &on_surface))
+      return lf.ref_winding + delta >= 1;
+    if (on_surface) return true;  // on the boundary: the solid is closed
+  }
+  // Rare: ref -> p passes through an edge or a vertex. Route through another point r2 of the
+  // cell: w(r2) = w(ref) - (w(ref) - w(r2)), then w(p) = w(r2) + (w(p) - w(r2)). Both segments
+  // stay in the cell, so the leaf's triangles are all that can cross them.
+  ++counters.exact_fallbacks;
+  const double cs = t_.cell_size(t_.leaf_level);
+  const double inv = 1.0 / cs;
+  Vec3d lo;
+  for (int k = 0; k < 3; ++k)
+    lo[k] = t_.root_lo[k] + std::floor((double(lf.centre[k]) - t_.root_lo[k]) * inv) * cs;
+  const Vec3d hi = lo + Vec3d(cs, cs, cs), cc = (lo + hi) * 0.5;
+  int sides[64];
+  for (const Vec3d& off : ref_offsets()) {
+    if (!lf.ref_valid) break;
+    const Vec3d r2 = round_to_float(cc + off * (0.5 * cs));
+    if (!(r2.x > lo.x && r2.x < hi.x && r2.y > lo.y && r2.y < hi.y && r2.z > lo.z && r2.z < hi.z)) continue;
+    bool ok = true;
+    std::fill(sides, sides + 64, 0);
+    auto side_r2 = [&](std::uint32_t k) {  // exact sides of r2, cached for the first 64
+      if (k < 64 && sides[k] != 0) return sides[k];
+      const LeafTri& t = blk[k];
+      const int o = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), r2);
+      if (o == 0) ok = false;
+      if (k < 64) sides[k] = o;
+      return o == 0 ? 1 : o;
+    };
+    int d1, d2;
+    bool on1 = false;
+    if (!leaf_winding(ref, r2, blk, n, lf, side_r2, counters, &d1, &on1) || !ok) continue;
+    const int w_r2 = lf.ref_winding - d1;
+    if (!leaf_winding(p, r2, blk, n, lf, side_r2, counters, &d2, &on_surface)) {
+      if (on_surface) return true;
+      continue;
+    }
+    if (!ok) continue;
+    return w_r2 + d2 >= 1;
+  }
+  return lf.ref_winding >= 1;  // no usable reference point: deterministic, documented
+}
+
+namespace {
+
+struct StackItem {
+  Vec3d lo;
+  double bound;
+  std::uint32_t node;
+  int level;
+};
+
+}  // namespace
+
+DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
+  if (++query_id_ == 0) {  // wrapped: forget every stamp
+    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    query_id_ = 1;
+  }
+  const std::uint32_t qid = query_id_;
+  double best2 = std::numeric_limits<double>::infinity();
+  double best = best2;
+  std::uint32_t best_k = UINT32_MAX, best_tri = UINT32_MAX;
+  Vec3d best_q;
+  const LeafTri* tris = t_.tris.data();
+
+  auto test_tri = [&](std::uint32_t k) {
+    const LeafTri& t = tris[k];
+    if (stamp_[t.tri] == qid) return;
+    stamp_[t.tri] = qid;
+    ++counters.triangles_tested;
+    const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
+    const double d2 = squared_norm(q - p);
+    if (d2 < best2 || (d2 == best2 && t.tri < best_tri)) {
+      best2 = d2;
+      best = std::sqrt(d2);
+      best_k = k;
+      best_tri = t.tri;
+      best_q = q;
+    }
+  };
+  if (coherent_ && last_tri_ != UINT32_MAX) test_tri(last_tri_);
+
+  // Plane bounds are evaluated in float in the root's frame; `slack` covers their rounding
+  // (normals unit to 1e-7, float products), so that every bound stays a lower bound.
+  const Vec3d pr = p - t_.root_centre;
+  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
+  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t_.root_size);
+  const Plane* planes = t_.planes.data();
+  const Node* nodes = t_.nodes.data();
+
+  auto lower_bound = [&](const Node& nd, const Vec3d& lo, double size) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+      d2 += v * v;
+    }
+    double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
+      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    counters.planes_tested += nd.plane_count;
+    return std::max(b, double(m) - slack);
+  };
+
+  StackItem stack[8 * (kMaxLevel + 2)];
+  int sp = 0;
+  stack[sp++] = {t_.root_lo, lower_bound(nodes[0], t_.root_lo, t_.root_size), 0u, 0};
+  while (sp > 0) {
+    const StackItem it = stack[--sp];
+    if (it.bound > best) continue;
+    const Node& nd = nodes[it.node];
+    ++counters.nodes_visited;
+    if (nd.kind == NodeKind::leaf) {
+      const Leaf& lf = t_.leaves[nd.index];
+      const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+                  pz = float(p.z - double(lf.centre[2]));
+      const double eps = double(lf.eps);
+      counters.planes_tested += lf.tri_count;
+      for (std::uint32_t k = lf.tri_begin, e = lf.tri_begin + lf.tri_count; k < e; ++k) {
+        const LeafTri& t = tris[k];
+        // The face plane is a lower bound of the triangle's distance.
+        const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+        if (double(std::fabs(s)) - eps > best) continue;
+        test_tri(k);
+      }
+      continue;
+    }
+    // Inner: children ordered by bound, nearest popped first.
+    const int cl = it.level + 1;
+    const double csz = t_.cell_size(cl);
+    StackItem kids[8];
+    int nk = 0;
+    for (int o = 0; o < 8; ++o) {
+      const std::uint32_t ci = t_.children[nd.index + std::uint32_t(o)];
+      const Node& cn = nodes[ci];
+      if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
+      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+      const double b = lower_bound(cn, lo, csz);
+      if (b > best) continue;
+      kids[nk++] = {lo, b, ci, cl};
+    }
+    // insertion sort, descending bound
+    for (int a = 1; a < nk; ++a) {
+      StackItem x = kids[a];
+      int b = a - 1;
+      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+      kids[b + 1] = x;
+    }
+    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+  }
+
+  DistanceAnswer r;
+  if (best_k == UINT32_MAX) return r;  // cannot happen: the mesh has a triangle
+  const LeafTri& t = tris[best_k];
+  r.distance = best;
+  r.closest = best_q;
+  r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
+  r.triangle = std::int64_t(t.tri);
+  if (coherent_) last_tri_ = best_k;
+  return r;
+}
+
+DistanceAnswer Query::distance(const Vec3d& p) {
+  DistanceAnswer r = unsigned_distance(p);
+  if (inside(p)) r.distance = -r.distance;
+  return r;
+}
+
+}  // namespace ebp

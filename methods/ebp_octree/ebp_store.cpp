@@ -1,0 +1,790 @@
+// The `.ebp` store: writer (from an in-memory Octree, page by page), reader (header, pinned top
+// tree, directory, pages decoded on demand into ordinary Octrees). Every number read from the
+// file is checked before it is used as a size, an offset or an index. See ebp_store.hpp and
+// OUT_OF_CORE.md.
+#include "ebp_store.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#if defined(__x86_64__)
+#include <nmmintrin.h>
+#endif
+
+#include "errors.hpp"
+
+namespace ebp {
+
+// ---------------------------------------------------------------------------------------------
+// CRC-32C
+namespace {
+
+struct CrcTable {
+  std::uint32_t t[256];
+  CrcTable() {
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? (c >> 1) ^ 0x82F63B78u : c >> 1;
+      t[i] = c;
+    }
+  }
+};
+
+std::uint32_t crc_sw(const std::uint8_t* p, std::size_t n, std::uint32_t c) {
+  static const CrcTable tab;
+  while (n--) c = tab.t[(c ^ *p++) & 0xffu] ^ (c >> 8);
+  return c;
+}
+
+#if defined(__x86_64__)
+__attribute__((target("sse4.2"))) std::uint32_t crc_hw(const std::uint8_t* p, std::size_t n, std::uint32_t c32) {
+  std::uint64_t c = c32;
+  while (n >= 8) {
+    std::uint64_t v;
+    std::memcpy(&v, p, 8);
+    c = _mm_crc32_u64(c, v);
+    p += 8;
+    n -= 8;
+  }
+  c32 = std::uint32_t(c);
+  while (n--) c32 = _mm_crc32_u8(c32, *p++);
+  return c32;
+}
+#endif
+
+}  // namespace
+
+std::uint32_t crc32c(const void* data, std::size_t n, std::uint32_t crc) {
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  std::uint32_t c = ~crc;
+#if defined(__x86_64__)
+  static const bool hw = __builtin_cpu_supports("sse4.2");
+  c = hw ? crc_hw(p, n, c) : crc_sw(p, n, c);
+#else
+  c = crc_sw(p, n, c);
+#endif
+  return ~c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writer
+namespace {
+
+std::uint64_t align_up(std::uint64_t v, std::uint64_t a) { return (v + a - 1) / a * a; }
+
+struct Fd {
+  int fd = -1;
+  std::string path;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+[[noreturn]] void io_fail(const std::string& path, const std::string& what) {
+  throw std::runtime_error(path + ": " + what + ": " + std::strerror(errno));
+}
+
+void pwrite_all(const Fd& f, const void* data, std::size_t n, std::uint64_t off) {
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  while (n > 0) {
+    const ssize_t w = ::pwrite(f.fd, p, n, off_t(off));
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      io_fail(f.path, "write failed");
+    }
+    if (w == 0) {
+      errno = ENOSPC;
+      io_fail(f.path, "write failed");
+    }
+    p += w;
+    n -= std::size_t(w);
+    off += std::uint64_t(w);
+  }
+}
+
+/// The cut of the tree into a pinned top and pages (subtrees packed by parent).
+struct PageSpec {
+  Octcode parent;
+  std::vector<PageRoot> roots;  // octant, node index in the original tree
+};
+
+struct Plan {
+  std::vector<TopNode> top;
+  std::vector<std::uint32_t> top_children;
+  std::vector<Plane> top_planes;
+  std::vector<PageSpec> pages;
+};
+
+std::uint64_t node_own_bytes(const Octree& t, const Node& nd) {
+  std::uint64_t b = sizeof(Node) + sizeof(Plane) * nd.plane_count;
+  if (nd.kind == NodeKind::inner) b += 8 * sizeof(std::uint32_t);
+  if (nd.kind == NodeKind::leaf)
+    b += sizeof(Leaf) + std::uint64_t(t.leaves[nd.index].tri_count) * (sizeof(LeafTri) + sizeof(std::uint32_t));
+  return b;
+}
+
+std::uint64_t subtree_bytes(const Octree& t, std::uint32_t i, std::vector<std::uint64_t>& memo) {
+  const Node& nd = t.nodes[i];
+  std::uint64_t b = node_own_bytes(t, nd);
+  if (nd.kind == NodeKind::inner)
+    for (int o = 0; o < 8; ++o) b += subtree_bytes(t, t.children[nd.index + std::uint32_t(o)], memo);
+  memo[i] = b;
+  return b;
+}
+
+std::uint32_t push_top(Plan& P, const Octree& t, std::uint32_t i, TopKind kind, std::uint32_t index) {
+  const Node& nd = t.nodes[i];
+  TopNode tn{};
+  tn.code = nd.code;
+  tn.plane_begin = std::uint32_t(P.top_planes.size());
+  tn.plane_count = (kind == TopKind::inner || kind == TopKind::page) ? nd.plane_count : 0;
+  for (std::uint32_t k = 0; k < tn.plane_count; ++k) P.top_planes.push_back(t.planes[nd.plane_begin + k]);
+  tn.kind = kind;
+  tn.index = index;
+  P.top.push_back(tn);
+  return std::uint32_t(P.top.size() - 1);
+}
+
+std::uint32_t make_top(Plan& P, const Octree& t, std::uint32_t i, const std::vector<std::uint64_t>& memo,
+                       std::uint64_t target) {
+  const Node& nd = t.nodes[i];
+  const std::uint32_t cb = std::uint32_t(P.top_children.size());
+  const std::uint32_t me = push_top(P, t, i, TopKind::inner, cb);
+  P.top_children.resize(cb + 8);
+  PageSpec group{nd.code, {}};
+  std::vector<std::uint32_t> group_top;
+  std::uint64_t group_bytes = 0;
+  auto flush = [&] {
+    if (group.roots.empty()) return;
+    const auto id = std::uint32_t(P.pages.size());
+    for (std::uint32_t k : group_top) P.top[k].index = id;
+    P.pages.push_back(group);
+    group.roots.clear();
+    group_top.clear();
+    group_bytes = 0;
+  };
+  for (std::uint32_t o = 0; o < 8; ++o) {
+    const std::uint32_t c = t.children[nd.index + o];
+    const Node& cn = t.nodes[c];
+    if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) {
+      P.top_children[cb + o] = push_top(P, t, c, cn.kind == NodeKind::white ? TopKind::white : TopKind::black, 0);
+    } else if (cn.kind == NodeKind::inner && memo[c] > target) {
+      flush();  // keep the pages in octcode order
+      P.top_children[cb + o] = make_top(P, t, c, memo, target);
+    } else {
+      if (!group.roots.empty() && group_bytes + memo[c] > target) flush();
+      group.roots.push_back({o, c});
+      group_bytes += memo[c];
+      const std::uint32_t k = push_top(P, t, c, TopKind::page, 0);
+      group_top.push_back(k);
+      P.top_children[cb + o] = k;
+    }
+  }
+  flush();
+  return me;
+}
+
+Plan plan_pages(const Octree& t, std::uint64_t target) {
+  Plan P;
+  std::vector<std::uint64_t> memo(t.nodes.size(), 0);
+  const std::uint64_t total = subtree_bytes(t, 0, memo);
+  if (t.nodes[0].kind != NodeKind::inner || total <= target) {
+    push_top(P, t, 0, TopKind::page, 0);
+    P.pages.push_back({kNoParent, {{0, 0}}});
+  } else {
+    make_top(P, t, 0, memo, target);
+  }
+  return P;
+}
+
+/// Serialises one page of the plan.
+std::vector<std::uint8_t> serialise_page(const Octree& t, const PageSpec& spec, std::uint32_t id, PageEntry* e) {
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> children;
+  std::vector<Plane> planes;
+  std::vector<Leaf> leaves;
+  std::vector<LeafTri> tris;
+  std::vector<PageRoot> roots;
+  // Pre-order copy of a subtree with page-local indices.
+  std::function<std::uint32_t(std::uint32_t)> emit = [&](std::uint32_t i) -> std::uint32_t {
+    const Node& src = t.nodes[i];
+    const auto li = std::uint32_t(nodes.size());
+    nodes.push_back(src);
+    nodes[li].plane_begin = std::uint32_t(planes.size());
+    planes.insert(planes.end(), t.planes.begin() + src.plane_begin, t.planes.begin() + src.plane_begin + src.plane_count);
+    if (src.kind == NodeKind::leaf) {
+      Leaf lf = t.leaves[src.index];
+      const auto tb = std::uint32_t(tris.size());
+      tris.insert(tris.end(), t.tris.begin() + lf.tri_begin, t.tris.begin() + lf.tri_begin + lf.tri_count);
+      lf.tri_begin = tb;
+      nodes[li].index = std::uint32_t(leaves.size());
+      leaves.push_back(lf);
+    } else if (src.kind == NodeKind::inner) {
+      const auto cb = std::uint32_t(children.size());
+      children.resize(cb + 8);
+      nodes[li].index = cb;
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        const std::uint32_t c = emit(t.children[src.index + o]);
+        children[cb + o] = c;
+      }
+    } else {
+      nodes[li].index = 0;
+    }
+    nodes[li].next = std::uint32_t(nodes.size());
+    return li;
+  };
+  for (const PageRoot& r : spec.roots) roots.push_back({r.octant, emit(r.node)});
+  std::vector<std::uint32_t> local;
+  local.reserve(tris.size());
+  for (const LeafTri& lt : tris) local.push_back(lt.tri);
+  std::sort(local.begin(), local.end());
+  local.erase(std::unique(local.begin(), local.end()), local.end());
+  for (LeafTri& lt : tris)
+    lt.tri = std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri) - local.begin());
+
+  PageHeader ph{};
+  ph.magic = kPageMagic;
+  ph.page_id = id;
+  ph.parent = spec.parent;
+  ph.nroots = std::uint32_t(roots.size());
+  ph.nnodes = std::uint32_t(nodes.size());
+  ph.nchildren = std::uint32_t(children.size());
+  ph.nplanes = std::uint32_t(planes.size());
+  ph.nleaves = std::uint32_t(leaves.size());
+  ph.ntris = std::uint32_t(tris.size());
+  ph.nlocal = std::uint32_t(local.size());
+  std::vector<std::uint8_t> out;
+  auto put = [&](const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    out.insert(out.end(), b, b + n);
+  };
+  put(&ph, sizeof ph);
+  put(roots.data(), roots.size() * sizeof(PageRoot));
+  put(nodes.data(), nodes.size() * sizeof(Node));
+  put(children.data(), children.size() * sizeof(std::uint32_t));
+  put(planes.data(), planes.size() * sizeof(Plane));
+  put(leaves.data(), leaves.size() * sizeof(Leaf));
+  put(tris.data(), tris.size() * sizeof(LeafTri));
+  put(local.data(), local.size() * sizeof(std::uint32_t));
+  if (out.size() > kMaxPageBytes) throw std::runtime_error("ebp store: a page exceeds 1 GiB (one leaf too large)");
+  e->size = std::uint32_t(out.size());
+  e->crc = crc32c(out.data(), out.size());
+  e->parent = spec.parent;
+  e->triangles = ph.ntris;
+  e->nodes = ph.nnodes;
+  return out;
+}
+
+}  // namespace
+
+void write_store(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
+  if (t.nodes.empty()) throw std::invalid_argument("ebp store: empty tree");
+  const Plan P = plan_pages(t, std::max<std::size_t>(opt.page_target, 4096));
+  Fd f;
+  f.path = path;
+  f.fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
+  if (f.fd < 0) io_fail(path, "cannot create");
+
+  FileHeader h{};
+  std::memcpy(h.magic, kStoreMagic, 8);
+  h.version = kStoreVersion;
+  h.header_size = sizeof(FileHeader);
+  for (int k = 0; k < 3; ++k) h.root_lo[k] = t.root_lo[k];
+  h.root_size = t.root_size;
+  h.leaf_level = std::uint32_t(t.leaf_level);
+  h.num_triangles = t.num_triangles;
+  h.leaf_factor = opt.params.leaf_factor;
+  h.cluster_angle = opt.params.cluster_angle;
+  h.max_planes = opt.params.max_planes;
+  h.page_target = std::uint32_t(std::max<std::size_t>(opt.page_target, 4096));
+  h.nodes = t.nodes.size();
+  h.leaves = t.leaves.size();
+  for (const Node& nd : t.nodes) {
+    if (nd.kind == NodeKind::inner) ++h.inner;
+    if (nd.kind == NodeKind::white) ++h.white;
+    if (nd.kind == NodeKind::black) ++h.black;
+  }
+  h.triangle_refs = t.tris.size();
+  h.planes = t.planes.size();
+  h.num_pages = P.pages.size();
+  h.num_top_nodes = P.top.size();
+  h.num_top_children = P.top_children.size();
+  h.num_top_planes = P.top_planes.size();
+
+  std::uint64_t off = sizeof(FileHeader);
+  auto section = [&](const void* data, std::size_t n, Section* s) {
+    s->offset = off;
+    s->size = n;
+    s->crc = crc32c(data, n);
+    if (n) pwrite_all(f, data, n, off);
+    off = align_up(off + n, 8);
+  };
+  section(P.top.data(), P.top.size() * sizeof(TopNode), &h.top_nodes);
+  section(P.top_children.data(), P.top_children.size() * sizeof(std::uint32_t), &h.top_children);
+  section(P.top_planes.data(), P.top_planes.size() * sizeof(Plane), &h.top_planes);
+  section(opt.info_json.data(), opt.info_json.size(), &h.info);
+
+  std::vector<PageEntry> dir(P.pages.size());
+  off = align_up(off, kPageAlign);
+  h.pages.offset = off;
+  for (std::uint32_t id = 0; id < P.pages.size(); ++id) {
+    if (opt.before_page) opt.before_page(id);
+    PageEntry& e = dir[id];
+    const std::vector<std::uint8_t> blob = serialise_page(t, P.pages[id], id, &e);
+    e.offset = off;
+    pwrite_all(f, blob.data(), blob.size(), off);
+    off = align_up(off + blob.size(), kPageAlign);
+    if (opt.progress) opt.progress(double(id + 1) / double(P.pages.size()));
+  }
+  h.pages.size = off - h.pages.offset;
+  h.pages.crc = 0;  // each page has its own checksum (in the directory)
+  section(dir.data(), dir.size() * sizeof(PageEntry), &h.directory);
+  h.file_size = h.directory.offset + h.directory.size;
+  if (::ftruncate(f.fd, off_t(h.file_size)) != 0) io_fail(path, "truncate failed");
+  h.header_crc = 0;
+  h.header_crc = crc32c(&h, sizeof h);
+  pwrite_all(f, &h, sizeof h, 0);
+  if (::fsync(f.fd) != 0) io_fail(path, "fsync failed");
+  if (::close(f.fd) != 0) {
+    f.fd = -1;
+    io_fail(path, "close failed");
+  }
+  f.fd = -1;
+}
+
+void write_store_atomic(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
+  const std::string tmp = path + ".tmp";
+  try {
+    write_store(t, tmp, opt);
+    if (::rename(tmp.c_str(), path.c_str()) != 0) io_fail(path, "rename failed");
+  } catch (...) {
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  // Make the rename durable.
+  std::string dir = path.substr(0, path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/'));
+  if (dir.empty()) dir = path.find('/') == 0 ? "/" : ".";
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reader
+namespace {
+
+bool finite3(const float* f) { return std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]); }
+
+}  // namespace
+
+StoreReader::StoreReader(const std::string& path, Options opt) : path_(path), opt_(opt) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw bvhbench::file_error(path, std::string("cannot open: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    fd_ = -1;
+    throw bvhbench::file_error(path, "not a regular file");
+  }
+  file_size_ = std::uint64_t(st.st_size);
+  try {
+    open_and_check();
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+StoreReader::StoreReader(std::vector<std::uint8_t> bytes, const std::string& name, Options opt)
+    : path_(name), mem_(std::move(bytes)), in_memory_(true), opt_(opt) {
+  file_size_ = mem_.size();
+  open_and_check();
+}
+
+StoreReader::~StoreReader() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void StoreReader::fail(const std::string& what) const { throw bvhbench::file_error(path_, what); }
+
+void StoreReader::read_at(std::uint64_t off, void* dst, std::size_t n) const {
+  if (off > file_size_ || n > file_size_ - off) fail("read past the end of the file (truncated?)");
+  if (in_memory_) {
+    if (n) std::memcpy(dst, mem_.data() + off, n);
+    return;
+  }
+  auto* p = static_cast<std::uint8_t*>(dst);
+  while (n > 0) {
+    const ssize_t r = ::pread(fd_, p, n, off_t(off));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      fail(std::string("read failed: ") + std::strerror(errno));
+    }
+    if (r == 0) fail("unexpected end of file (truncated while open?)");
+    p += r;
+    n -= std::size_t(r);
+    off += std::uint64_t(r);
+  }
+}
+
+void StoreReader::drop_os_cache() const {
+  if (fd_ >= 0) (void)::posix_fadvise(fd_, 0, 0, POSIX_FADV_DONTNEED);
+}
+
+std::size_t StoreReader::pinned_bytes() const {
+  return sizeof(*this) + top_nodes_.capacity() * sizeof(TopNode) + top_children_.capacity() * 4 +
+         top_planes_.capacity() * sizeof(Plane) + dir_.capacity() * sizeof(PageEntry) + info_.capacity() +
+         page_parent_.capacity() * sizeof(Octcode) + page_octants_.capacity();
+}
+
+void StoreReader::open_and_check() {
+  if (file_size_ < sizeof(FileHeader))
+    fail("truncated: " + std::to_string(file_size_) + " bytes, smaller than the 512-byte header");
+  read_at(0, &h_, sizeof h_);
+  if (std::memcmp(h_.magic, kStoreMagic, 8) != 0) fail("not an EBP-Octree store (bad magic)");
+  if (h_.version != kStoreVersion)
+    fail("unsupported store version " + std::to_string(h_.version) + " (this build reads version " +
+         std::to_string(kStoreVersion) + ")");
+  if (h_.header_size != sizeof(FileHeader)) fail("bad header size " + std::to_string(h_.header_size));
+  if (opt_.verify_checksums) {
+    FileHeader c = h_;
+    c.header_crc = 0;
+    if (crc32c(&c, sizeof c) != h_.header_crc) fail("header checksum mismatch (corrupted header)");
+  }
+  if (h_.file_size != file_size_)
+    fail("size mismatch: the header says " + std::to_string(h_.file_size) + " bytes, the file has " +
+         std::to_string(file_size_) + " (truncated or extended)");
+  if (h_.leaf_level < 1 || h_.leaf_level > std::uint32_t(kMaxLevel)) fail("bad leaf level " + std::to_string(h_.leaf_level));
+  if (!(std::isfinite(h_.root_lo[0]) && std::isfinite(h_.root_lo[1]) && std::isfinite(h_.root_lo[2]) &&
+        std::isfinite(h_.root_size) && h_.root_size > 0))
+    fail("bad bounding cube");
+  if (h_.num_triangles == 0) fail("no triangles");
+  if (h_.num_pages == 0 || h_.num_pages > 0xffffffffull) fail("bad page count " + std::to_string(h_.num_pages));
+  struct Named { const char* name; const Section* s; std::uint64_t expect; };
+  const Named secs[] = {
+      {"top nodes", &h_.top_nodes, h_.num_top_nodes * sizeof(TopNode)},
+      {"top children", &h_.top_children, h_.num_top_children * sizeof(std::uint32_t)},
+      {"top planes", &h_.top_planes, h_.num_top_planes * sizeof(Plane)},
+      {"info", &h_.info, h_.info.size},
+      {"pages", &h_.pages, h_.pages.size},
+      {"directory", &h_.directory, h_.num_pages * sizeof(PageEntry)},
+  };
+  if (h_.num_top_nodes > file_size_ || h_.num_top_children > file_size_ || h_.num_top_planes > file_size_)
+    fail("bad top-tree counts");
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
+  for (const Named& n : secs) {
+    const Section& s = *n.s;
+    if (s.size != n.expect)
+      fail(std::string("section '") + n.name + "' has " + std::to_string(s.size) + " bytes, expected " +
+           std::to_string(n.expect));
+    if (s.offset < sizeof(FileHeader) || s.offset > file_size_ || s.size > file_size_ - s.offset)
+      fail(std::string("section '") + n.name + "' lies outside the file (offset " + std::to_string(s.offset) +
+           ", size " + std::to_string(s.size) + ")");
+    if (s.size) ranges.push_back({s.offset, s.offset + s.size});
+  }
+  std::sort(ranges.begin(), ranges.end());
+  for (std::size_t i = 1; i < ranges.size(); ++i)
+    if (ranges[i].first < ranges[i - 1].second) fail("sections overlap");
+  if (h_.info.size > (64u << 20)) fail("info section larger than 64 MiB");
+  if (h_.num_top_nodes == 0) fail("empty top tree");
+
+  auto load = [&](const Section& s, void* dst, const char* name) {
+    read_at(s.offset, dst, std::size_t(s.size));
+    if (opt_.verify_checksums && crc32c(dst, std::size_t(s.size)) != s.crc)
+      fail(std::string("checksum mismatch in section '") + name + "' (corrupted)");
+  };
+  top_nodes_.resize(std::size_t(h_.num_top_nodes));
+  top_children_.resize(std::size_t(h_.num_top_children));
+  top_planes_.resize(std::size_t(h_.num_top_planes));
+  dir_.resize(std::size_t(h_.num_pages));
+  info_.resize(std::size_t(h_.info.size));
+  load(h_.top_nodes, top_nodes_.data(), "top nodes");
+  load(h_.top_children, top_children_.data(), "top children");
+  load(h_.top_planes, top_planes_.data(), "top planes");
+  load(h_.info, info_.data(), "info");
+  load(h_.directory, dir_.data(), "directory");
+
+  // Top planes finite.
+  for (const Plane& p : top_planes_)
+    if (!finite3(p.n) || !std::isfinite(p.d)) fail("non-finite plane in the top tree");
+  // Top tree: structure from the root, every child's code the child of its parent's.
+  const int L = int(h_.leaf_level);
+  page_parent_.assign(dir_.size(), kNoParent);
+  page_octants_.assign(dir_.size(), 0);
+  std::vector<std::uint8_t> page_seen(dir_.size(), 0);
+  if (top_nodes_[0].code != octcode_root()) fail("top tree: node 0 is not the root");
+  std::vector<std::pair<std::uint32_t, Octcode>> todo{{0u, kNoParent}};  // node, parent code
+  std::size_t visited = 0;
+  while (!todo.empty()) {
+    const auto [i, parent] = todo.back();
+    todo.pop_back();
+    if (++visited > top_nodes_.size()) fail("top tree: a node is reached twice");
+    const TopNode& n = top_nodes_[i];
+    if (std::uint8_t(n.kind) > 3) fail("top tree: bad node kind " + std::to_string(int(n.kind)));
+    if (std::uint64_t(n.plane_begin) + n.plane_count > top_planes_.size()) fail("top tree: plane range out of bounds");
+    if (octcode_level(n.code) > L) fail("top tree: node below the leaf level");
+    if (n.kind == TopKind::inner) {
+      if (octcode_level(n.code) >= L) fail("top tree: inner node at the leaf level");
+      if (std::uint64_t(n.index) + 8 > top_children_.size()) fail("top tree: children out of bounds");
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        const std::uint32_t c = top_children_[n.index + o];
+        if (c >= top_nodes_.size() || c <= i) fail("top tree: bad child index " + std::to_string(c));
+        if (top_nodes_[c].code != octcode_child(n.code, int(o))) fail("top tree: child code mismatch");
+        todo.push_back({c, n.code});
+      }
+    } else if (n.kind == TopKind::page) {
+      if (n.index >= dir_.size()) fail("top tree: page index " + std::to_string(n.index) + " out of range");
+      if (page_seen[n.index] && page_parent_[n.index] != parent) fail("top tree: a page under two parents");
+      page_seen[n.index] = 1;
+      page_parent_[n.index] = parent;
+      const std::uint32_t oct = parent == kNoParent ? 0u : std::uint32_t(octcode_octant(n.code));
+      if (parent == kNoParent) page_octants_[n.index] = 1;
+      else page_octants_[n.index] |= std::uint8_t(1u << oct);
+    }
+  }
+  // Directory: pages inside the pages section, aligned, non-overlapping, each referenced.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> pr;
+  pr.reserve(dir_.size());
+  const std::uint64_t pbeg = h_.pages.offset, pend = h_.pages.offset + h_.pages.size;
+  for (std::size_t id = 0; id < dir_.size(); ++id) {
+    const PageEntry& e = dir_[id];
+    if (!page_seen[id]) fail("page " + std::to_string(id) + " is not referenced by the top tree");
+    if (e.parent != page_parent_[id]) fail("page " + std::to_string(id) + ": parent code mismatch");
+    if (e.size < sizeof(PageHeader) || e.size > kMaxPageBytes)
+      fail("page " + std::to_string(id) + ": bad size " + std::to_string(e.size));
+    if (e.offset < pbeg || e.offset > pend || e.size > pend - e.offset)
+      fail("page " + std::to_string(id) + ": offset " + std::to_string(e.offset) + " outside the pages section");
+    pr.push_back({e.offset, e.offset + e.size});
+  }
+  std::sort(pr.begin(), pr.end());
+  for (std::size_t i = 1; i < pr.size(); ++i)
+    if (pr[i].first < pr[i - 1].second) fail("pages overlap");
+}
+
+std::unique_ptr<Page> StoreReader::load_page(std::uint32_t id, std::uint64_t* bytes_read) const {
+  if (id >= dir_.size()) fail("page " + std::to_string(id) + " out of range");
+  const PageEntry& e = dir_[id];
+  const std::string where = "page " + std::to_string(id) + ": ";
+  std::vector<std::uint8_t> buf(e.size);
+  read_at(e.offset, buf.data(), buf.size());
+  if (bytes_read) *bytes_read += e.size;
+  if (opt_.verify_checksums && crc32c(buf.data(), buf.size()) != e.crc) fail(where + "checksum mismatch (corrupted)");
+  PageHeader ph;
+  std::memcpy(&ph, buf.data(), sizeof ph);
+  if (ph.magic != kPageMagic) fail(where + "bad page magic");
+  if (ph.page_id != id) fail(where + "page id mismatch");
+  if (ph.parent != page_parent_[id]) fail(where + "parent code mismatch");
+  const std::uint64_t need = sizeof(PageHeader) + std::uint64_t(ph.nroots) * sizeof(PageRoot) +
+                             std::uint64_t(ph.nnodes) * sizeof(Node) + std::uint64_t(ph.nchildren) * 4 +
+                             std::uint64_t(ph.nplanes) * sizeof(Plane) + std::uint64_t(ph.nleaves) * sizeof(Leaf) +
+                             std::uint64_t(ph.ntris) * sizeof(LeafTri) + std::uint64_t(ph.nlocal) * 4;
+  if (need != e.size) fail(where + "array sizes do not add up to the page size");
+  const int L = int(h_.leaf_level);
+  const bool root_page = ph.parent == kNoParent;
+  int lp = -1;
+  if (!root_page) {
+    lp = octcode_level(ph.parent);
+    if (lp >= L || octcode_make(lp, octcode_morton(ph.parent)) != ph.parent) fail(where + "bad parent code");
+  }
+  if (ph.nroots == 0 || ph.nroots > 8 || (root_page && ph.nroots != 1)) fail(where + "bad number of roots");
+  if (ph.nnodes == 0) fail(where + "no nodes");
+
+  const std::uint8_t* p = buf.data() + sizeof(PageHeader);
+  std::vector<PageRoot> roots(ph.nroots);
+  auto take = [&](void* dst, std::size_t n) {
+    if (n) std::memcpy(dst, p, n);
+    p += n;
+  };
+  take(roots.data(), roots.size() * sizeof(PageRoot));
+  auto page = std::make_unique<Page>();
+  page->id = id;
+  Octree& T = page->tree;
+  const std::uint32_t chain = root_page ? 0u : std::uint32_t(lp + 2);  // chain nodes + the white dummy
+  const std::uint32_t cbase = root_page ? 0u : std::uint32_t(8 * (lp + 1));
+  if (std::uint64_t(ph.nnodes) + chain >= 0xffffffffull || std::uint64_t(ph.nchildren) + cbase >= 0xffffffffull)
+    fail(where + "too many nodes");
+  T.nodes.resize(chain + ph.nnodes);
+  T.children.resize(cbase + ph.nchildren);
+  T.planes.resize(ph.nplanes);
+  T.leaves.resize(ph.nleaves);
+  T.tris.resize(ph.ntris);
+  page->global_tri.resize(ph.nlocal);
+  take(T.nodes.data() + chain, std::size_t(ph.nnodes) * sizeof(Node));
+  take(T.children.data() + cbase, std::size_t(ph.nchildren) * 4);
+  take(T.planes.data(), std::size_t(ph.nplanes) * sizeof(Plane));
+  take(T.leaves.data(), std::size_t(ph.nleaves) * sizeof(Leaf));
+  take(T.tris.data(), std::size_t(ph.ntris) * sizeof(LeafTri));
+  take(page->global_tri.data(), std::size_t(ph.nlocal) * 4);
+
+  // Roots: octants distinct, matching the top tree's entries for this page, codes right.
+  std::uint8_t mask = 0;
+  for (const PageRoot& r : roots) {
+    if (r.node >= ph.nnodes) fail(where + "root node out of range");
+    if (root_page) {
+      if (r.node != 0 || T.nodes[chain + r.node].code != octcode_root()) fail(where + "bad root");
+      mask = 1;
+      continue;
+    }
+    if (r.octant > 7 || (mask & (1u << r.octant))) fail(where + "bad root octant");
+    mask |= std::uint8_t(1u << r.octant);
+    if (T.nodes[chain + r.node].code != octcode_child(ph.parent, int(r.octant))) fail(where + "root code mismatch");
+  }
+  if (mask != page_octants_[id]) fail(where + "roots do not match the top tree");
+  // Nodes.
+  for (std::uint32_t k = 0; k < ph.nnodes; ++k) {
+    Node& nd = T.nodes[chain + k];
+    const int lvl = octcode_level(nd.code);
+    if (lvl > L || std::uint8_t(nd.kind) > 3 || std::uint8_t(nd.config) > 2) fail(where + "bad node " + std::to_string(k));
+    if (std::uint64_t(nd.plane_begin) + nd.plane_count > ph.nplanes) fail(where + "plane range out of bounds");
+    if (nd.next > ph.nnodes || nd.next <= k) fail(where + "bad subtree end");
+    nd.next += chain;
+    if (nd.kind == NodeKind::inner) {
+      if (lvl >= L) fail(where + "inner node at the leaf level");
+      if (std::uint64_t(nd.index) + 8 > ph.nchildren) fail(where + "children out of bounds");
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        std::uint32_t& c = T.children[cbase + nd.index + o];
+        if (c >= ph.nnodes || c <= k) fail(where + "bad child index");
+        if (T.nodes[chain + c].code != octcode_child(nd.code, int(o))) fail(where + "child code mismatch");
+        c += chain;
+      }
+      nd.index += cbase;
+    } else if (nd.kind == NodeKind::leaf) {
+      if (lvl != L) fail(where + "leaf above the leaf level");
+      if (nd.index >= ph.nleaves) fail(where + "leaf index out of range");
+    }
+  }
+  for (const Plane& pl : T.planes)
+    if (!finite3(pl.n) || !std::isfinite(pl.d)) fail(where + "non-finite plane");
+  for (const Leaf& lf : T.leaves) {
+    if (!finite3(lf.centre) || !finite3(lf.ref) || !std::isfinite(lf.eps) || !(lf.eps >= 0))
+      fail(where + "non-finite leaf record");
+    if (std::uint64_t(lf.tri_begin) + lf.tri_count > ph.ntris) fail(where + "leaf triangle block out of bounds");
+  }
+  for (const LeafTri& lt : T.tris) {
+    if (!finite3(lt.a) || !finite3(lt.b) || !finite3(lt.c) || !finite3(lt.n) || !std::isfinite(lt.d))
+      fail(where + "non-finite triangle");
+    if (lt.tri >= ph.nlocal) fail(where + "triangle index out of range");
+  }
+  for (std::uint32_t k = 0; k < ph.nlocal; ++k)
+    if (page->global_tri[k] >= h_.num_triangles || (k > 0 && page->global_tri[k] <= page->global_tri[k - 1]))
+      fail(where + "bad triangle table");
+
+  // The chain from the root to the parent, and the white dummy.
+  if (!root_page) {
+    const std::uint32_t dummy = std::uint32_t(lp + 1);
+    const std::uint64_t pm = octcode_morton(ph.parent);
+    for (int k = 0; k <= lp; ++k) {
+      Node& nd = T.nodes[std::size_t(k)];
+      nd = Node{};
+      nd.code = octcode_make(k, pm >> (3 * (lp - k)));
+      nd.kind = NodeKind::inner;
+      nd.config = LeafConfig::special;
+      nd.index = std::uint32_t(8 * k);
+      nd.next = std::uint32_t(T.nodes.size());
+      for (std::uint32_t o = 0; o < 8; ++o) T.children[std::size_t(8 * k) + o] = dummy;
+      if (k < lp) T.children[std::size_t(8 * k) + std::uint32_t(octcode_octant(octcode_make(k + 1, pm >> (3 * (lp - k - 1)))))] = std::uint32_t(k + 1);
+    }
+    for (const PageRoot& r : roots) T.children[std::size_t(8 * lp) + r.octant] = chain + r.node;
+    Node& d = T.nodes[dummy];
+    d = Node{};
+    d.code = kNoParent;
+    d.kind = NodeKind::white;
+    d.next = dummy + 1;
+  }
+  T.root_lo = Vec3d(h_.root_lo[0], h_.root_lo[1], h_.root_lo[2]);
+  T.root_size = h_.root_size;
+  T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
+  T.leaf_level = L;
+  T.num_triangles = ph.nlocal;
+  return page;
+}
+
+Octree StoreReader::load_all() const {
+  Octree T;
+  T.root_lo = Vec3d(h_.root_lo[0], h_.root_lo[1], h_.root_lo[2]);
+  T.root_size = h_.root_size;
+  T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
+  T.leaf_level = int(h_.leaf_level);
+  T.num_triangles = h_.num_triangles;
+  std::map<std::uint32_t, std::unique_ptr<Page>> pages;
+  // Copies node i of page pg's tree (page-local indexing) into T, pre-order.
+  std::function<std::uint32_t(const Page&, std::uint32_t)> copy_page = [&](const Page& pg, std::uint32_t i) {
+    const Node& src = pg.tree.nodes[i];
+    const auto ni = std::uint32_t(T.nodes.size());
+    T.nodes.push_back(src);
+    T.nodes[ni].plane_begin = std::uint32_t(T.planes.size());
+    T.planes.insert(T.planes.end(), pg.tree.planes.begin() + src.plane_begin,
+                    pg.tree.planes.begin() + src.plane_begin + src.plane_count);
+    if (src.kind == NodeKind::leaf) {
+      Leaf lf = pg.tree.leaves[src.index];
+      const auto tb = std::uint32_t(T.tris.size());
+      for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+        LeafTri lt = pg.tree.tris[lf.tri_begin + k];
+        lt.tri = pg.global_tri[lt.tri];
+        T.tris.push_back(lt);
+      }
+      lf.tri_begin = tb;
+      T.nodes[ni].index = std::uint32_t(T.leaves.size());
+      T.leaves.push_back(lf);
+    } else if (src.kind == NodeKind::inner) {
+      const auto cb = std::uint32_t(T.children.size());
+      T.children.resize(cb + 8);
+      T.nodes[ni].index = cb;
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        const std::uint32_t c = copy_page(pg, pg.tree.children[src.index + o]);
+        T.children[cb + o] = c;
+      }
+    }
+    T.nodes[ni].next = std::uint32_t(T.nodes.size());
+    return ni;
+  };
+  std::function<std::uint32_t(std::uint32_t)> copy_top = [&](std::uint32_t i) -> std::uint32_t {
+    const TopNode& tn = top_nodes_[i];
+    if (tn.kind == TopKind::page) {
+      auto it = pages.find(tn.index);
+      if (it == pages.end()) it = pages.emplace(tn.index, load_page(tn.index)).first;
+      const Page& pg = *it->second;
+      // Find the page node with this code (a root of the page).
+      for (std::uint32_t k = 0; k < pg.tree.nodes.size(); ++k)
+        if (pg.tree.nodes[k].code == tn.code && pg.tree.nodes[k].kind != NodeKind::white) return copy_page(pg, k);
+      fail("page " + std::to_string(tn.index) + " lacks its root");
+    }
+    const auto ni = std::uint32_t(T.nodes.size());
+    Node nd{};
+    nd.code = tn.code;
+    nd.plane_begin = std::uint32_t(T.planes.size());
+    nd.plane_count = tn.plane_count;
+    T.planes.insert(T.planes.end(), top_planes_.begin() + tn.plane_begin,
+                    top_planes_.begin() + tn.plane_begin + tn.plane_count);
+    nd.config = LeafConfig::special;
+    nd.kind = tn.kind == TopKind::white ? NodeKind::white : tn.kind == TopKind::black ? NodeKind::black : NodeKind::inner;
+    T.nodes.push_back(nd);
+    if (tn.kind == TopKind::inner) {
+      const auto cb = std::uint32_t(T.children.size());
+      T.children.resize(cb + 8);
+      T.nodes[ni].index = cb;
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        const std::uint32_t c = copy_top(top_children_[tn.index + o]);
+        T.children[cb + o] = c;
+      }
+    }
+    T.nodes[ni].next = std::uint32_t(T.nodes.size());
+    return ni;
+  };
+  copy_top(0);
+  return T;
+}
+
+}  // namespace ebp
