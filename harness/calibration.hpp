@@ -21,8 +21,9 @@ inline constexpr const char* kCalibrationKernel = "chase_fp/1";
 /// distance in floating point at each node (the traversal's arithmetic). `steps` node visits.
 double calibration_kernel(std::uint32_t nodes, std::uint32_t steps);
 
-/// The result's `calibration` block: the kernel timed `samples` times (after one untimed
-/// warm-up), each taking ~30 ms on a 2020s desktop core.
+/// The result's `calibration` block: the kernel timed `samples` times after a short untimed
+/// warm-up, each run ~20 ms on a quiet 2020s core; on a crowded machine sampling stops after
+/// 3 samples once 1 s went into it (the kernel's work per sample never changes).
 /// {"kernel": "chase_fp/1", "nodes": .., "steps": .., "working_set_bytes": ..,
 ///  "kernel_seconds": [..samples..], "median_seconds": .., "min_seconds": .., "checksum": ..}
 nlohmann::json measure_calibration(int samples = 5);
