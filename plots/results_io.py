@@ -227,19 +227,37 @@ class ResultSet:
         return set()
 
     def contexts(self):
-        """Distinct (machine, run) contexts, most common first, with their job counts."""
-        counts = OrderedDict()
+        """The machine(s) and run(s) behind the results, one dict per machine and build.
+
+        Jobs of one suite carry their own dates (and, on a tree being edited, commits), so a
+        context gathers them: first and last date, the distinct commits, any dirty flag.
+        """
+        groups = OrderedDict()
         for j in self.jobs:
             ctx = j.get("context")
             ctx = ctx if isinstance(ctx, dict) else {}
-            key = tuple(as_str(ctx.get(k)) for k in CONTEXT_KEYS)
-            counts[key] = counts.get(key, 0) + 1
-        out = [dict(zip(CONTEXT_KEYS, k), jobs=n) for k, n in counts.items()]
+            c = {k: as_str(ctx.get(k)) for k in CONTEXT_KEYS}
+            key = tuple(c[k] for k in MACHINE_KEYS)
+            g = groups.setdefault(key, dict(zip(MACHINE_KEYS, key), dates=[], commits=[],
+                                             dirty=False, jobs=0))
+            g["jobs"] += 1
+            if c["date"]:
+                g["dates"].append(c["date"])
+            if c["git_commit"] and c["git_commit"] not in g["commits"]:
+                g["commits"].append(c["git_commit"])
+            g["dirty"] |= c["git_dirty"].lower() == "true"
+        out = []
+        for g in groups.values():
+            dates = sorted(g.pop("dates"))
+            g["date_first"], g["date_last"] = (dates[0], dates[-1]) if dates else ("", "")
+            out.append(g)
         return sorted(out, key=lambda c: -c["jobs"])
 
 
 CONTEXT_KEYS = ("host", "cpu_model", "cores", "date", "git_commit", "git_dirty", "compiler",
                 "build_type", "bvhbench_version")
+# What makes two results comparable "machine-wise"; dates and commits vary within a suite.
+MACHINE_KEYS = ("host", "cpu_model", "cores", "compiler", "build_type", "bvhbench_version")
 
 
 def load(root):

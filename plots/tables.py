@@ -80,28 +80,51 @@ def render_csv(header, rows):
 # ---------------------------------------------------------------------------------------------
 # Context: which machine, which run
 # ---------------------------------------------------------------------------------------------
+def _dates(c):
+    a, b = c["date_first"], c["date_last"]
+    if not a:
+        return "date unknown"
+    if a == b:
+        return a
+    # Same day: give the second time only ('2026-11-22T07:20:12Z to 07:27:20Z').
+    if a[:10] == b[:10] and "T" in b:
+        return f"{a} to {b.split('T', 1)[1]}"
+    return f"{a} to {b}"
+
+
+def _commits(c, limit=3):
+    short = [x[:10] for x in c["commits"]]
+    if not short:
+        s = "commit unknown"
+    elif len(short) == 1:
+        s = f"commit {short[0]}"
+    else:
+        s = (f"{len(short)} commits ({', '.join(short[:limit])}"
+             + (", ..." if len(short) > limit else "") + ")")
+    return s + (" (dirty)" if c["dirty"] else "")
+
+
 def context_line(rs):
     """One line naming the machine(s) and run(s) behind the results."""
+    ctxs = rs.contexts()
     parts = []
-    for c in rs.contexts():
-        commit = (c["git_commit"] or "?")[:10]
-        dirty = c["git_dirty"].lower() == "true"
-        cores = c["cores"] or "?"
-        s = (f"machine {c['host'] or '?'} ({c['cpu_model'] or 'unknown CPU'}, {cores} cores); "
-             f"run {c['date'] or '?'}, commit {commit}{' (dirty)' if dirty else ''}")
-        if c["compiler"] or c["build_type"]:
-            s += f", {c['compiler']} {c['build_type']}".rstrip()
-        if len(rs.contexts()) > 1:
+    for c in ctxs:
+        s = (f"machine {c['host'] or '?'} ({c['cpu_model'] or 'unknown CPU'}, "
+             f"{c['cores'] or '?'} cores"
+             + (f", {c['compiler']} {c['build_type']}".rstrip() if c["compiler"] else "")
+             + f"); run {_dates(c)}, {_commits(c)}")
+        if len(ctxs) > 1:
             s += f" [{c['jobs']} jobs]"
         parts.append(s)
     return f"Suite `{rs.name}`: " + "; ".join(parts) + "."
 
 
 def context_table(rs):
-    header = ["host", "CPU", "cores", "date", "git commit", "dirty", "compiler", "build type",
-              "bvhbench", "jobs"]
-    rows = [[c["host"], c["cpu_model"], c["cores"], c["date"], c["git_commit"], c["git_dirty"],
-             c["compiler"], c["build_type"], c["bvhbench_version"], c["jobs"]]
+    header = ["host", "CPU", "cores", "compiler", "build type", "bvhbench", "dates",
+              "git commits", "dirty", "jobs"]
+    rows = [[c["host"], c["cpu_model"], c["cores"], c["compiler"], c["build_type"],
+             c["bvhbench_version"], _dates(c), ", ".join(c["commits"]),
+             "yes" if c["dirty"] else "no", c["jobs"]]
             for c in rs.contexts()]
     return header, rows
 
