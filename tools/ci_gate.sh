@@ -14,9 +14,13 @@ set -uo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 EXE="${BVHBENCH_EXE:-$ROOT/build/bvhbench}"
-SUITE="$ROOT/suites/ci.yml"
-BASE="$ROOT/results/baseline"
-OUT="${CI_GATE_OUT:-$ROOT/results/ci-latest}"
+case "$EXE" in /*) ;; *) EXE="$PWD/$EXE" ;; esac
+# Paths relative to the repository, so that the committed results do not name this checkout.
+cd "$ROOT" || exit 2
+SUITE="suites/ci.yml"
+BASE="results/baseline"
+OUT="${CI_GATE_OUT:-results/ci-latest}"
+case "$OUT" in ""|/|.|..|"$ROOT") echo "ci_gate: refusing CI_GATE_OUT='$OUT'" >&2; exit 2 ;; esac
 
 mode=gate
 compare_args=()
