@@ -19,6 +19,8 @@
 #include "registry.hpp"
 
 namespace bvhbench {
+std::unique_ptr<Method> make_ebp_ooc_method(const Params& p);  // ebp_cli.cpp
+void add_ebp_store_commands(CLI::App& ebp_cmd);             // ebp_cli.cpp
 namespace {
 
 std::vector<ParamSpec> ebp_params() {
@@ -30,6 +32,10 @@ std::vector<ParamSpec> ebp_params() {
        "degrees: face normals closer than this share one bounding plane", {}, 0.5, 90},
       {"coherent", ParamType::boolean, "false",
        "path coherence: seed distance with the previous closest triangle, reuse the previous leaf", {}},
+      // out of core (ebp_cli.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
+      {"store", ParamType::text, "", "out of core: answer from this .ebp store through a page cache", {}},
+      {"cache_mb", ParamType::integer, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
+      {"cold", ParamType::boolean, "false", "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
   };
 }
 
@@ -213,14 +219,18 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.description =
       "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
       "winding-number crossings, branch-and-bound distance";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, /*out_of_core*/ false};
+  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, /*out_of_core*/ true};
   m.params = ebp_params();
-  m.create = [](const Params& p) { return std::make_unique<EbpOctreeMethod>(p); };
+  m.create = [](const Params& p) -> std::unique_ptr<Method> {
+    if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core: ebp_cli.cpp
+    return std::make_unique<EbpOctreeMethod>(p);
+  };
   r.add(std::move(m));
   // `bvhbench ebp <sub>`: one command group; later issues add subcommands in add_*_command.
   r.add_command({"ebp", [](CLI::App& app) {
                    auto* ebp_cmd = app.add_subcommand("ebp", "EBP-Octree tools (stats; build/info for the on-disk store)");
                    ebp_cmd->require_subcommand(1);
                    add_stats_command(*ebp_cmd);
+                   add_ebp_store_commands(*ebp_cmd);  // build, info: ebp_cli.cpp
                  }});
 }

@@ -1,0 +1,379 @@
+// The harness side of the out-of-core EBP-Octree: the method variant `ebp_octree:store=M.ebp`
+// (the adapter in ebp_method.cpp delegates here when `store` is given) and the commands
+// `bvhbench ebp build` and `bvhbench ebp info` (attached to the `ebp` group by one hook line in
+// ebp_method.cpp). See OUT_OF_CORE.md.
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "ebp_ooc.hpp"
+#include "ebp_store.hpp"
+#include "errors.hpp"
+#include "mesh.hpp"
+#include "progress.hpp"
+#include "registry.hpp"
+
+namespace bvhbench {
+
+std::unique_ptr<Method> make_ebp_ooc_method(const Params& p);
+void add_ebp_store_commands(CLI::App& ebp_cmd);
+
+namespace {
+
+std::uint64_t peak_rss_bytes() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return 0;
+  char line[256];
+  std::uint64_t kb = 0;
+  while (std::fgets(line, sizeof line, f))
+    if (std::sscanf(line, "VmHWM: %lu kB", &kb) == 1) break;
+  std::fclose(f);
+  return kb * 1024;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The method variant
+class EbpOocMethod final : public Method {
+ public:
+  explicit EbpOocMethod(const Params& p)
+      : path_(p.get("store")),
+        cache_bytes_(std::size_t(p.get_int("cache_mb")) << 20),
+        cold_(p.get_bool("cold")),
+        coherent_(p.get_bool("coherent")) {}
+
+  void build(const Mesh& mesh, const BuildContext&) override {
+    ooc_.emplace(path_, cache_bytes_, coherent_, cold_);
+    const ebp::FileHeader& h = ooc_->store().header();
+    if (!mesh.triangles.empty() && h.num_triangles != mesh.num_triangles())
+      throw file_error(path_, "built for a mesh of " + std::to_string(h.num_triangles) + " triangles, " + mesh.path +
+                                  " has " + std::to_string(mesh.num_triangles()));
+    const auto info = nlohmann::json::parse(ooc_->store().info_json(), nullptr, false);
+    if (info.is_object() && info.contains("mesh_sha256") && info["mesh_sha256"].is_string() && !mesh.sha256.empty() &&
+        info["mesh_sha256"].get<std::string>() != mesh.sha256)
+      throw file_error(path_, "built from another mesh (sha256 differs from " + mesh.path + ")");
+  }
+  bool supports(QueryType) const override { return true; }
+  bool inside(const Vec3d& p) override { return ooc_->inside(p); }
+  DistanceResult distance(const Vec3d& p) override {
+    const ebp::DistanceAnswer a = ooc_->distance(p);
+    DistanceResult r;
+    r.distance = a.distance;
+    r.closest = a.closest;
+    r.normal = a.normal;
+    r.triangle = a.triangle;
+    return r;
+  }
+  void reset_path() override {
+    if (ooc_) ooc_->reset_path();
+  }
+  std::size_t structure_bytes() const override { return ooc_ ? ooc_->bytes() : 0; }
+  std::vector<Counter> counters() const override {
+    if (!ooc_) return {};
+    const ebp::QueryCounters c = ooc_->counters();
+    const ebp::PageCache& k = ooc_->cache();
+    return {{"nodes_visited", c.nodes_visited}, {"planes_tested", c.planes_tested},
+            {"triangles_tested", c.triangles_tested}, {"hit_white", c.hit_white},
+            {"hit_black", c.hit_black}, {"hit_convex", c.hit_convex},
+            {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
+            {"exact_fallbacks", c.exact_fallbacks}, {"cache_hits", k.hits},
+            {"cache_misses", k.misses}, {"bytes_read", k.bytes_read},
+            {"cache_evictions", k.evictions}};
+  }
+  void reset_counters() override {
+    if (ooc_) ooc_->reset_counters();
+  }
+  nlohmann::json info() const override {
+    if (!ooc_) return nlohmann::json::object();
+    const ebp::FileHeader& h = ooc_->store().header();
+    nlohmann::json j;
+    j["store"] = path_;
+    j["store_bytes"] = h.file_size;
+    j["pages"] = h.num_pages;
+    j["top_nodes"] = h.num_top_nodes;
+    j["leaf_level"] = h.leaf_level;
+    j["nodes"] = h.nodes;
+    j["triangle_refs"] = h.triangle_refs;
+    j["cache_budget_bytes"] = cache_bytes_;
+    j["pinned_bytes"] = ooc_->store().pinned_bytes() + ooc_->cache().bookkeeping_bytes();
+    j["cold"] = cold_;
+    return j;
+  }
+
+ private:
+  std::string path_;
+  std::size_t cache_bytes_;
+  bool cold_, coherent_;
+  std::optional<ebp::OutOfCore> ooc_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// `ebp build`: interrupt handling and temporary files
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void on_signal(int s) { g_signal = s; }
+
+struct SignalGuard {
+  struct sigaction old_int {}, old_term {};
+  SignalGuard() {
+    g_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+  }
+  ~SignalGuard() {
+    sigaction(SIGINT, &old_int, nullptr);
+    sigaction(SIGTERM, &old_term, nullptr);
+  }
+  static void check() {
+    if (g_signal) throw std::runtime_error(std::string("interrupted by ") + (g_signal == SIGINT ? "SIGINT" : "SIGTERM"));
+  }
+};
+
+/// A private temporary directory, removed with everything in it on scope exit.
+struct TempDir {
+  std::filesystem::path path;
+  explicit TempDir(const std::string& parent) {
+    std::string tmpl = (std::filesystem::path(parent) / "ebp-build-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw file_error(parent, "cannot create a temporary directory there");
+    path = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+std::map<std::string, std::string> parse_kv(const std::vector<std::string>& kvs) {
+  std::map<std::string, std::string> given;
+  for (const std::string& kv : kvs) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("--param " + kv + ": expected key=value");
+    if (given.count(kv.substr(0, eq))) throw InputError("--param " + kv.substr(0, eq) + " given twice");
+    given[kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
+  return given;
+}
+
+void add_build_command(CLI::App& ebp_cmd) {
+  struct Opts {
+    std::string mesh, out, tmp;
+    std::vector<std::string> params;
+    double budget_mb = 0;
+    int threads = 2;
+    int page_kb = 64;
+    bool json = false;
+    int fail_after_pages = -1;  // test hook
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = ebp_cmd.add_subcommand("build", "Build the EBP-Octree of a mesh into an on-disk store (.ebp)");
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--out", o->out, "Output store (.ebp); appears only when complete")->required();
+  cmd->add_option("--memory-budget", o->budget_mb, "Memory budget in MiB (see OUT_OF_CORE.md: what it bounds)")
+      ->required()
+      ->check(CLI::Range(1.0, 1e9));
+  cmd->add_option("--tmp", o->tmp, "Directory for temporary files (default: beside --out)");
+  cmd->add_option("--param", o->params, "Build parameter key=value (repeatable): leaf_factor, max_planes, cluster_angle");
+  cmd->add_option("--threads", o->threads, "Build threads")->check(CLI::Range(1, 1024));
+  cmd->add_option("--page-kb", o->page_kb, "Target page size in KiB (subtrees packed up to it)")->check(CLI::Range(4, 1 << 20));
+  cmd->add_option("--fail-after-pages", o->fail_after_pages, "Testing: fail after writing N pages")->group("");
+  cmd->add_flag("--json", o->json, "Machine-readable summary");
+  cmd->callback([o] {
+    const auto t0 = std::chrono::steady_clock::now();
+    SignalGuard signals;
+    const MethodInfo* mi = Registry::global().find("ebp_octree");
+    if (!mi) throw std::logic_error("ebp_octree is not registered");
+    std::map<std::string, std::string> given = parse_kv(o->params);
+    for (const char* k : {"store", "cache_mb", "cold", "coherent"})
+      if (given.count(k)) throw InputError(std::string("--param ") + k + ": not a build parameter");
+    const Params p = Params::resolve("ebp_octree", mi->params, given);
+    ebp::BuildParams bp;
+    bp.leaf_factor = p.get_real("leaf_factor");
+    bp.max_planes = int(p.get_int("max_planes"));
+    bp.cluster_angle = p.get_real("cluster_angle");
+    bp.threads = o->threads;
+
+    const std::filesystem::path out = std::filesystem::absolute(o->out);
+    if (!std::filesystem::is_directory(out.parent_path()))
+      throw file_error(o->out, "the output directory does not exist");
+    TempDir tmp(o->tmp.empty() ? out.parent_path().string() : o->tmp);
+
+    Progress load("loading " + o->mesh, 1.0, !o->json);
+    Mesh mesh = load_mesh(o->mesh);
+    load.finish();
+    SignalGuard::check();
+    const std::size_t ntri = mesh.num_triangles();
+    const double budget = o->budget_mb * 1048576.0;
+    ebp::Octree tree;
+    {
+      Progress prog("building ebp_octree", 1.0, !o->json);
+      try {
+        tree = ebp::Octree::build(mesh.vertices, mesh.triangles, bp, [&](double f) {
+          SignalGuard::check();
+          prog.update(f);
+        });
+      } catch (const std::invalid_argument& e) {
+        throw file_error(mesh.path, e.what());
+      }
+      prog.finish();
+    }
+    const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::string sha = mesh.sha256, mesh_path = mesh.path;
+    Mesh().vertices.swap(mesh.vertices);  // the store needs the tree only
+    std::vector<std::array<std::uint32_t, 3>>().swap(mesh.triangles);
+    SignalGuard::check();
+
+    nlohmann::json info;
+    const ebp::Stats& s = tree.stats;
+    info["mesh"] = mesh_path;
+    info["mesh_sha256"] = sha;
+    info["triangles"] = ntri;
+    info["params"] = p.values();
+    info["threads"] = o->threads;
+    info["leaf_level"] = s.leaf_level;
+    info["leaf_size"] = s.leaf_size;
+    info["average_edge"] = s.average_edge;
+    info["nodes_per_level"] = s.nodes_per_level;
+    info["leaf_configurations"] = {{"convex", s.convex}, {"concave", s.concave}, {"special", s.special}};
+    info["max_refs_per_leaf"] = s.max_refs_per_leaf;
+    info["tree_bytes"] = tree.bytes();
+    info["build_seconds"] = s.build_seconds;
+
+    ebp::StoreWriteOptions wo;
+    wo.page_target = std::size_t(o->page_kb) * 1024;
+    wo.params = bp;
+    wo.info_json = info.dump();
+    Progress wprog("writing " + o->out, 1.0, !o->json);
+    wo.progress = [&](double f) { wprog.update(f); };
+    const int fail_after = o->fail_after_pages;
+    wo.before_page = [fail_after](std::uint32_t id) {
+      SignalGuard::check();
+      if (fail_after >= 0 && id >= std::uint32_t(fail_after)) throw std::runtime_error("simulated failure (--fail-after-pages)");
+    };
+    try {
+      ebp::write_store_atomic(tree, out.string(), wo);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string(e.what()) + "; nothing written (no " + o->out + ", temporary files removed)");
+    }
+    wprog.finish();
+    const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::uint64_t peak = peak_rss_bytes();
+    const ebp::StoreReader check(out.string());
+    const ebp::FileHeader& h = check.header();
+    nlohmann::json j{{"out", out.string()},
+                     {"triangles", ntri},
+                     {"pages", h.num_pages},
+                     {"bytes", h.file_size},
+                     {"build_seconds", build_s},
+                     {"total_seconds", total_s},
+                     {"triangles_per_second", double(ntri) / total_s},
+                     {"peak_rss_bytes", peak},
+                     {"memory_budget_bytes", budget},
+                     {"within_budget", double(peak) <= budget}};
+    if (o->json) {
+      std::cout << j.dump(2) << "\n";
+    } else {
+      std::printf("wrote %s: %zu triangles, %lu pages, %.1f MiB in %.1f s (%.0f triangles/s, %d threads)\n",
+                  out.c_str(), ntri, (unsigned long)h.num_pages, double(h.file_size) / 1048576.0, total_s,
+                  double(ntri) / total_s, o->threads);
+      std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
+                  double(peak) <= budget ? "" : " (EXCEEDED: the tree is built in memory, see OUT_OF_CORE.md)");
+    }
+  });
+}
+
+void add_info_command(CLI::App& ebp_cmd) {
+  struct Opts {
+    std::string path;
+    bool json = false;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = ebp_cmd.add_subcommand("info", "Print the header, levels, counts and sizes of a store (.ebp)");
+  cmd->add_option("store", o->path, "Store (.ebp)")->required();
+  cmd->add_flag("--json", o->json, "Machine-readable output");
+  cmd->callback([o] {
+    const ebp::StoreReader r(o->path);
+    const ebp::FileHeader& h = r.header();
+    std::uint64_t page_min = UINT64_MAX, page_max = 0, page_sum = 0;
+    for (const ebp::PageEntry& e : r.directory()) {
+      page_min = std::min<std::uint64_t>(page_min, e.size);
+      page_max = std::max<std::uint64_t>(page_max, e.size);
+      page_sum += e.size;
+    }
+    std::map<int, std::uint64_t> top_levels;
+    for (const ebp::TopNode& t : r.top_nodes()) top_levels[ebp::octcode_level(t.code)]++;
+    nlohmann::json info = nlohmann::json::parse(r.info_json(), nullptr, false);
+    if (info.is_discarded()) info = nlohmann::json::object();
+    nlohmann::json j;
+    j["path"] = o->path;
+    j["version"] = h.version;
+    j["file_bytes"] = h.file_size;
+    j["root"] = {{"lo", {h.root_lo[0], h.root_lo[1], h.root_lo[2]}}, {"size", h.root_size}};
+    j["leaf_level"] = h.leaf_level;
+    j["levels"] = h.leaf_level + 1;
+    j["triangles"] = h.num_triangles;
+    j["params"] = {{"leaf_factor", h.leaf_factor}, {"max_planes", h.max_planes}, {"cluster_angle", h.cluster_angle}};
+    j["nodes"] = {{"total", h.nodes}, {"grey_inner", h.inner}, {"grey_leaves", h.leaves},
+                  {"white", h.white}, {"black", h.black}};
+    j["triangle_refs"] = h.triangle_refs;
+    j["planes"] = h.planes;
+    j["top"] = {{"nodes", h.num_top_nodes}, {"children", h.num_top_children}, {"planes", h.num_top_planes},
+                {"pinned_bytes", r.pinned_bytes()}};
+    nlohmann::json per_level = nlohmann::json::object();
+    for (auto& [l, n] : top_levels) per_level[std::to_string(l)] = n;
+    j["top"]["nodes_per_level"] = per_level;
+    j["pages"] = {{"count", h.num_pages}, {"target_bytes", h.page_target}, {"min_bytes", page_min},
+                  {"max_bytes", page_max}, {"mean_bytes", double(page_sum) / double(h.num_pages)},
+                  {"total_bytes", page_sum}};
+    auto sec = [](const ebp::Section& s) { return nlohmann::json{{"offset", s.offset}, {"size", s.size}}; };
+    j["sections"] = {{"top_nodes", sec(h.top_nodes)}, {"top_children", sec(h.top_children)},
+                     {"top_planes", sec(h.top_planes)}, {"info", sec(h.info)},
+                     {"pages", sec(h.pages)}, {"directory", sec(h.directory)}};
+    j["build"] = info;
+    if (o->json) {
+      std::cout << j.dump(2) << "\n";
+      return;
+    }
+    std::printf("EBP-Octree store %s (version %u, %.1f MiB)\n", o->path.c_str(), h.version, double(h.file_size) / 1048576.0);
+    std::printf("  mesh              %s (%u triangles)\n", info.value("mesh", std::string("?")).c_str(), h.num_triangles);
+    std::printf("  root cube         lo (%.9g, %.9g, %.9g), size %.9g\n", h.root_lo[0], h.root_lo[1], h.root_lo[2], h.root_size);
+    std::printf("  levels            %u (leaf level %u)\n", h.leaf_level + 1, h.leaf_level);
+    std::printf("  parameters        leaf_factor=%g max_planes=%d cluster_angle=%g\n", h.leaf_factor, h.max_planes, h.cluster_angle);
+    std::printf("  nodes             %lu: %lu grey inner, %lu grey leaves, %lu white, %lu black\n",
+                (unsigned long)h.nodes, (unsigned long)h.inner, (unsigned long)h.leaves, (unsigned long)h.white,
+                (unsigned long)h.black);
+    if (info.contains("nodes_per_level")) std::printf("  nodes per level   %s\n", info["nodes_per_level"].dump().c_str());
+    std::printf("  triangle refs     %lu; planes %lu\n", (unsigned long)h.triangle_refs, (unsigned long)h.planes);
+    std::printf("  top (pinned)      %lu nodes, levels %s, %.1f KiB in memory\n", (unsigned long)h.num_top_nodes,
+                per_level.dump().c_str(), double(r.pinned_bytes()) / 1024.0);
+    std::printf("  pages             %lu (target %u B): min %lu, mean %.0f, max %lu bytes; %.1f MiB in all\n",
+                (unsigned long)h.num_pages, h.page_target, (unsigned long)page_min, double(page_sum) / double(h.num_pages),
+                (unsigned long)page_max, double(page_sum) / 1048576.0);
+  });
+}
+
+}  // namespace
+
+std::unique_ptr<Method> make_ebp_ooc_method(const Params& p) { return std::make_unique<EbpOocMethod>(p); }
+
+void add_ebp_store_commands(CLI::App& ebp_cmd) {
+  add_build_command(ebp_cmd);
+  add_info_command(ebp_cmd);
+}
+
+}  // namespace bvhbench
