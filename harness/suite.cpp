@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -375,10 +376,14 @@ ChildOutcome run_child(const std::vector<std::string>& args, double timeout_s, d
                        const std::string& stderr_path) {
   ChildOutcome out;
   auto t0 = std::chrono::steady_clock::now();
+  const pid_t parent = getpid();
   pid_t pid = fork();
   if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
   if (pid == 0) {
     setpgid(0, 0);
+    // The job dies with the runner (a SIGKILLed runner must not leave jobs writing results).
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(127);
     if (memory_limit_mb > 0) {
       rlimit rl;
       rl.rlim_cur = rl.rlim_max = rlim_t(memory_limit_mb * 1024.0 * 1024.0);
@@ -611,8 +616,20 @@ void add_suite_command(CLI::App& app) {
     for (std::size_t i = 0; i < jobs.size() && !g_interrupted; ++i) {
       const JobPlan& j = jobs[i];
       const std::string result_path = (runs / (j.id + ".json")).string();
+      const std::string child_path = (runs / (j.id + ".json.child")).string();
       json existing;
       if (o->resume && read_json(result_path, &existing)) {
+        done.push_back(existing);
+        ++skipped;
+        continue;
+      }
+      if (o->resume && read_json(child_path, &existing)) {
+        // The job finished but the runner was killed before recording it: adopt the result.
+        existing["job"]["id"] = j.id;
+        existing["job"]["mesh"]["name"] = j.mesh.name;
+        existing["job"]["suite"] = cfg.name;
+        write_json_atomic(result_path, existing);
+        std::remove(child_path.c_str());
         done.push_back(existing);
         ++skipped;
         continue;
@@ -625,6 +642,7 @@ void add_suite_command(CLI::App& app) {
       spec.repeat = cfg.repeat;
       json result;
       auto [npy, qerr] = prepare_queries(j);
+      if (g_interrupted) break;  // the query set was cut short: not this job's failure
       spec.queries_path = npy;
       if (npy.empty()) {
         result = make_result(spec, qerr.find("exit code") == std::string::npos ? status::rejected_input : status::error,
@@ -635,23 +653,31 @@ void add_suite_command(CLI::App& app) {
         result["job"]["queries"]["n"] = j.queries.n;
       } else {
         spec.truth_path = prepare_truth(j, npy);
+        if (g_interrupted) break;
         std::vector<std::string> args = {exe, "--quiet", "run", "--mesh", spec.mesh_path, "--method", spec.method_spec,
                                          "--queries", spec.queries_path, "--query", to_string(spec.query_type),
-                                         "--repeat", std::to_string(spec.repeat), "--out", result_path};
+                                         "--repeat", std::to_string(spec.repeat), "--out", child_path};
         if (!spec.truth_path.empty()) {
           args.push_back("--truth");
           args.push_back(spec.truth_path);
         }
         std::remove(result_path.c_str());
+        std::remove(child_path.c_str());
         auto oc = run_child(args, cfg.timeout_s, cfg.memory_limit_mb, (logs / (j.id + ".log")).string());
-        if (g_interrupted) break;
-        if (!read_json(result_path, &result)) result = status_row(spec, j, oc, cfg.timeout_s);
+        const bool wrote = read_json(child_path, &result);
+        // Interrupted: keep a job that finished on its own, drop one the interrupt killed.
+        if (g_interrupted && !(wrote && oc.exited)) {
+          std::remove(child_path.c_str());
+          break;
+        }
+        if (!wrote) result = status_row(spec, j, oc, cfg.timeout_s);
         result["job"]["id"] = j.id;
         result["job"]["mesh"]["name"] = j.mesh.name;
         result["elapsed_seconds"] = oc.seconds;
       }
       result["job"]["suite"] = cfg.name;
       write_json_atomic(result_path, result);
+      std::remove(child_path.c_str());
       done.push_back(result);
       write_summary_csv((out / "summary.csv").string(), done);
       ++finished;
