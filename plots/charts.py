@@ -64,16 +64,20 @@ def _finish(fig, handles, legend_title=None, note=None, legend_width=2.3):
 
 
 def _log_ticks(ax, axis="y", formatter=None):
-    """Log axis ticks that stay readable: 1-2-5 labels when the axis spans under 2 decades."""
-    lo, hi = ax.get_ylim() if axis == "y" else ax.get_xlim()
+    """Log axis ticks that stay readable however many decades the data spans: 1..9 labels
+    under one decade, 1-2-5 under two, decades beyond. Pads the limits a little."""
+    get, set_ = (ax.get_ylim, ax.set_ylim) if axis == "y" else (ax.get_xlim, ax.set_xlim)
+    lo, hi = get()
     if lo <= 0 or hi <= 0:
         return
-    a = ax.yaxis if axis == "y" else ax.xaxis
-    if math.log10(hi / lo) < 0.9:  # not even one full decade: widen it around the data
+    if math.log10(hi / lo) < 0.3:      # a single value or nearly: give it some room
         mid = math.sqrt(lo * hi)
-        lo, hi = mid / 4, mid * 4
-        (ax.set_ylim if axis == "y" else ax.set_xlim)(lo, hi)
-    subs = (1.0, 2.0, 5.0) if math.log10(hi / lo) < 2.2 else (1.0,)
+        lo, hi = mid / 2, mid * 2
+    lo, hi = lo / 1.15, hi * 1.15
+    set_(lo, hi)
+    span = math.log10(hi / lo)
+    subs = (tuple(range(1, 10)) if span < 1.0 else (1.0, 2.0, 5.0) if span < 2.2 else (1.0,))
+    a = ax.yaxis if axis == "y" else ax.xaxis
     a.set_major_locator(LogLocator(base=10, subs=subs, numticks=12))
     a.set_minor_formatter(NullFormatter())
     if formatter is not None:
@@ -174,7 +178,7 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
                 ha=better_x, va=better_y, style="italic")
     if floor:
         lo = floor / 3
-        hi = max(x for _, x, _ in pts) * 10   # room for the sweep labels
+        hi = max(max(x for _, x, _ in pts), floor) * 10   # room for the sweep labels
         for ax in axes:
             ax.set_xlim(lo, max(hi, floor * 100))
             ax.xaxis.set_major_locator(LogLocator(base=10, numticks=8))
@@ -234,10 +238,10 @@ def _series(jobs, method, getter):
 
 
 def _size_axis(ax):
+    """Model size on a log x axis; call after plotting, ticks follow the data's span."""
     ax.set_xscale("log")
     ax.set_xlabel("Model size [triangles]", fontsize=8)
-    ax.xaxis.set_major_formatter(_si_formatter())
-    ax.xaxis.set_minor_formatter(NullFormatter())
+    _log_ticks(ax, "x", _si_formatter())
     ax.tick_params(labelsize=7)
     ax.grid(True, which="major", alpha=0.3)
 
@@ -372,7 +376,8 @@ def latency_haptic(rs):
             xs, ys = [], []
             for key, share in PERCENTILES:
                 v = j.num("queries.latency_ns." + key)
-                if v and v > 0:
+                # With n <= 1000 queries, p99.9 is the max itself: draw it once, as the max.
+                if v and v > 0 and not (n and share <= 1.0 / n):
                     xs.append(v)
                     ys.append(share)
             vmax = j.num("queries.latency_ns.max")
