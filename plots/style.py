@@ -9,6 +9,8 @@ import zlib
 import matplotlib
 
 matplotlib.use("Agg")  # headless: reports are built on CI machines and over ssh
+matplotlib.rcParams["svg.fonttype"] = "none"   # SVG text stays text: smaller, searchable
+matplotlib.rcParams["svg.hashsalt"] = "bvhbench"  # stable ids: re-running gives the same SVG
 
 METHOD_COLORS = {
     "ebp_octree": "#d62728",   # the star method: red, drawn on top

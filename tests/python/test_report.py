@@ -167,3 +167,29 @@ def test_representative_config_prefers_defaults(tmp_path):
     reps = results_io.representative_configs(rs.model_jobs())
     assert reps["ebp_octree"] == "" and reps["openvdb"] == "voxel=0.01"
     assert rs.stress_meshes == {"stress_degenerate", "stress_duplicate", "spot_noisy"}
+
+
+def _job(mesh, status, method="m"):
+    return results_io.Job({"status": status, "job": {
+        "method": method, "query": "inside", "mesh": {"name": mesh, "triangles": 100},
+        "queries": {"kind": "random"}}}, f"{mesh}.json")
+
+
+def test_stress_suite_recognised_by_its_failures():
+    """Meshes with unremarkable names, most of whose jobs fail: a stress suite."""
+    jobs = [_job(m, s) for m in ("a", "b", "c", "d") for s in ("ok", "crash", "timeout")]
+    rs = results_io.ResultSet("/tmp/suite", jobs, [], [])
+    assert rs.stress_meshes == {"a", "b", "c", "d"}
+    # One failure among many ok jobs does not make a stress suite.
+    jobs = [_job(m, "ok") for m in ("a", "b", "c", "d") for _ in range(5)] + [_job("a", "crash")]
+    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == set()
+    # The suite's name says so.
+    assert results_io.ResultSet("/tmp/stability", jobs, [], []).stress_meshes == {"a", "b", "c",
+                                                                                  "d"}
+
+
+def test_unknown_methods_get_a_stable_colour():
+    import style
+    assert style.method_color("ebp_octree") == style.METHOD_COLORS["ebp_octree"]
+    assert style.method_color("my_new_bvh") == style.method_color("my_new_bvh")
+    assert style.method_color("my_new_bvh").startswith("#")
