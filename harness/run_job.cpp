@@ -157,6 +157,7 @@ json run_job(const JobSpec& spec) {
     load_progress.finish();
     const Box3d bounds = mesh.bounds();
     const double diagonal = bounds.diagonal();
+    const std::string mesh_sha256 = mesh.sha256;  // the mesh itself is released after build
     r["job"]["mesh"] = {{"path", mesh.path},
                         {"sha256", mesh.sha256},
                         {"triangles", mesh.num_triangles()},
@@ -279,7 +280,7 @@ json run_job(const JobSpec& spec) {
 
     // ---- answers and accuracy -----------------------------------------------------------------
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
-    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal);
+    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256);
   } catch (const InputError& e) {
     fail(status::rejected_input, e.what());
   } catch (const UnsupportedError& e) {
