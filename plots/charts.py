@@ -19,7 +19,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 import fmt
 import tables
 from metrics import METRICS, axis_label, pareto_front
-from results_io import representative_configs
+from results_io import is_coherent, shown_configs
 from style import (DPI, FIGSIZE_PANEL, HAPTIC_DEADLINE_NS, HAPTIC_RATE_HZ, STATUS_COLORS,
                    STATUS_LABELS, STATUS_SEVERITY, method_color, method_marker,
                    method_sort_key)
@@ -207,14 +207,31 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
 # ---------------------------------------------------------------------------------------------
 # Scaling with model size
 # ---------------------------------------------------------------------------------------------
-def _rep_jobs(rs):
+def _rep_jobs(rs, coherent_variants=True):
+    """Jobs of the configurations shown per method, and those configurations [(method, key)]."""
     jobs = rs.model_jobs()
-    reps = representative_configs(jobs)
-    return [j for j in jobs if j.params_key == reps.get(j.method)], reps
+    configs = [c for c in shown_configs(jobs) if coherent_variants or not is_coherent(c[1])]
+    wanted = set(configs)
+    return [j for j in jobs if (j.method, j.params_key) in wanted], configs
 
 
-def _legend_label(method, reps):
-    return method + (f" ({reps[method]})" if reps.get(method) else "")
+def _cfg_label(cfg):
+    method, key = cfg
+    return method + (f" ({key})" if key else "")
+
+
+def _cfg_handle(cfg):
+    return Line2D([], [], color=method_color(cfg[0]), marker=method_marker(cfg[0]),
+                  linestyle=_cfg_linestyle(cfg), label=_cfg_label(cfg), markersize=6)
+
+
+def _cfg_linestyle(cfg):
+    return "--" if is_coherent(cfg[1]) else "-"
+
+
+def _plot_cfg(ax, xs, ys, cfg):
+    ax.plot(xs, ys, color=method_color(cfg[0]), marker=method_marker(cfg[0]), linewidth=1.6,
+            linestyle=_cfg_linestyle(cfg), zorder=3 if cfg[0] == tables.STAR else 2)
 
 
 def _failed_marks(ax, failed, method):
@@ -225,11 +242,11 @@ def _failed_marks(ax, failed, method):
                    color=method_color(method), s=40, linewidths=1.8, zorder=4, clip_on=False)
 
 
-def _series(jobs, method, getter):
-    """(triangles, median value) per model for one method, sorted by size."""
+def _series(jobs, cfg, getter):
+    """(triangles, median value) per model for one (method, params_key), sorted by size."""
     by_t = {}
     for j in jobs:
-        if j.method == method and j.ok and j.triangles:
+        if (j.method, j.params_key) == cfg and j.ok and j.triangles:
             v = getter(j)
             if v is not None and v > 0:
                 by_t.setdefault(j.triangles, []).append(v)
@@ -247,25 +264,23 @@ def _size_axis(ax):
 
 
 def throughput_vs_size(rs):
-    jobs, reps = _rep_jobs(rs)
+    jobs, configs = _rep_jobs(rs)
     combos = sorted({(j.query, j.kind) for j in jobs if j.ok and j.qps},
                     key=lambda p: (p[0] != "inside", _kind_key(p[1])))
     if not combos:
         raise NoData("no ok job with a throughput on a regular model")
-    methods = sorted({j.method for j in jobs}, key=method_sort_key)
     fig, axes = _grid(len(combos), max_cols=2)
     any_failed = False
     for ax, (query, kind) in zip(axes, combos):
         here = [j for j in jobs if j.query == query and j.kind == kind]
-        for m in methods:
-            xs, ys = _series(here, m, lambda j: j.qps)
+        for cfg in configs:
+            xs, ys = _series(here, cfg, lambda j: j.qps)
             if xs:
-                ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6,
-                        zorder=3 if m == tables.STAR else 2)
-            failed = [j for j in here if j.method == m and not j.ok
+                _plot_cfg(ax, xs, ys, cfg)
+            failed = [j for j in here if (j.method, j.params_key) == cfg and not j.ok
                       and j.status != "unsupported"]
             any_failed |= bool(failed)
-            _failed_marks(ax, failed, m)
+            _failed_marks(ax, failed, cfg[0])
         ax.axhline(HAPTIC_RATE_HZ, color="black", linestyle="--", linewidth=1)
         ax.text(0.99, HAPTIC_RATE_HZ, "1 kHz haptic rate", transform=ax.get_yaxis_transform(),
                 ha="right", va="bottom", fontsize=7)
@@ -276,7 +291,7 @@ def throughput_vs_size(rs):
         _log_ticks(ax, "y", _si_formatter("q/s"))
         ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
         ax.set_title(f"{query} · {kind} path", fontsize=9)
-    handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
+    handles = [_cfg_handle(c) for c in configs]
     if any_failed:
         handles.append(Line2D([], [], color="#555555", marker="x", linestyle="none",
                               label="did not finish ok\n(see non-ok table)"))
@@ -284,17 +299,16 @@ def throughput_vs_size(rs):
 
 
 def memory_vs_size(rs):
-    jobs, reps = _rep_jobs(rs)
-    methods = sorted({j.method for j in jobs}, key=method_sort_key)
+    jobs, configs = _rep_jobs(rs, coherent_variants=False)   # same structure either way
     bpt, rss = METRICS["bytes_per_triangle"].getter, METRICS["peak_rss"].getter
     if not any(bpt(j) or rss(j) for j in jobs if j.ok):
         raise NoData("no ok job reports its memory")
     fig, axes = _grid(2, max_cols=2)
-    for m in methods:
+    for cfg in configs:
         for ax, get in zip(axes, (bpt, rss)):
-            xs, ys = _series(jobs, m, get)
+            xs, ys = _series(jobs, cfg, get)
             if xs:
-                ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6)
+                _plot_cfg(ax, xs, ys, cfg)
     # The mesh itself, for scale: what any method must at least hold.
     mesh_pts = {}
     for j in jobs:
@@ -315,29 +329,28 @@ def memory_vs_size(rs):
         ax.set_yscale("log")
     _log_ticks(axes[0], "y", FuncFormatter(lambda v, _: f"{v:g}"))
     _log_ticks(axes[1], "y", FuncFormatter(lambda v, _: fmt.nbytes(v)))
-    handles = [_method_handle(m, _legend_label(m, reps)) for m in methods]
+    handles = [_cfg_handle(c) for c in configs]
     if mesh_pts:
         handles.append(Line2D([], [], color="black", linestyle=":", label="the mesh itself"))
     return _finish(fig, handles, "method")
 
 
 def build_time_vs_size(rs):
-    jobs, reps = _rep_jobs(rs)
-    methods = sorted({j.method for j in jobs}, key=method_sort_key)
+    jobs, configs = _rep_jobs(rs, coherent_variants=False)   # same structure either way
     if not any(j.build_seconds for j in jobs if j.ok):
         raise NoData("no ok job reports a build time")
     fig, axes = _grid(1)
     ax = axes[0]
-    for m in methods:
-        xs, ys = _series(jobs, m, lambda j: j.build_seconds)
+    for cfg in configs:
+        xs, ys = _series(jobs, cfg, lambda j: j.build_seconds)
         if xs:
-            ax.plot(xs, ys, color=method_color(m), marker=method_marker(m), linewidth=1.6)
+            _plot_cfg(ax, xs, ys, cfg)
     _size_axis(ax)
     ax.set_yscale("log")
     _log_ticks(ax, "y", FuncFormatter(lambda v, _: fmt.seconds(v)))
     ax.set_ylabel("Build time [s]\n(\u2190 lower is better)", fontsize=8)
     ax.set_title("Build time (median over the model's jobs)", fontsize=9)
-    return _finish(fig, [_method_handle(m, _legend_label(m, reps)) for m in methods], "method")
+    return _finish(fig, [_cfg_handle(c) for c in configs], "method")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -352,7 +365,7 @@ def latency_haptic(rs):
     The results carry only p50, p99, p99.9 and max, so those are the only points drawn; the
     dotted lines between them are a guide for the eye, not data.
     """
-    jobs, reps = _rep_jobs(rs)
+    jobs, _ = _rep_jobs(rs)
     jobs = [j for j in jobs if j.ok and j.kind == "haptic" and j.num("queries.latency_ns.p50")]
     if not jobs:
         raise NoData("no ok job on a haptic path records latency percentiles")
@@ -369,7 +382,7 @@ def latency_haptic(rs):
     y_lo = 0.5 / max(all_n) if all_n else 1e-4
     for ax, (query, mesh) in zip(axes, panels):
         here = sorted([j for j in jobs if j.query == query and j.mesh == mesh],
-                      key=lambda j: method_sort_key(j.method))
+                      key=lambda j: (method_sort_key(j.method), j.params_key))
         handles, all_x = [], []
         for j in here:
             n = j.n_queries
@@ -386,11 +399,14 @@ def latency_haptic(rs):
                 ys.append(1.0 / n)
             all_x += xs
             c, mk = method_color(j.method), method_marker(j.method)
-            ax.plot(xs, ys, color=c, marker=mk, linestyle=":", linewidth=1.2, markersize=6)
+            coh = is_coherent(j.params_key)
+            ax.plot(xs, ys, color=c, marker=mk, linestyle="--" if coh else ":", linewidth=1.2,
+                    markersize=6, markerfacecolor="white" if coh else c)
             over = j.num("queries.over_deadline")
             share = f"{100.0 * over / n:.2g}%" if over is not None and n else "unknown"
-            handles.append(Line2D([], [], color=c, marker=mk, linestyle=":",
-                                  label=f"{j.method}: {share}"))
+            handles.append(Line2D([], [], color=c, marker=mk, linestyle="--" if coh else ":",
+                                  markerfacecolor="white" if coh else c,
+                                  label=f"{j.method}{' (coherent)' if coh else ''}: {share}"))
         deadline = next((j.num("queries.deadline_ns") for j in here
                          if (j.num("queries.deadline_ns") or 0) > 0), HAPTIC_DEADLINE_NS)
         ax.axvline(deadline, color="black", linestyle="--", linewidth=1)

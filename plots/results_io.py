@@ -329,3 +329,30 @@ def representative_configs(jobs):
 
         chosen[method] = max(configs.items(), key=score)[0]
     return chosen
+
+
+def _without_coherent(key):
+    return ",".join(p for p in key.split(",") if p and not p.startswith("coherent="))
+
+
+def is_coherent(key):
+    return "coherent=true" in key.split(",")
+
+
+def shown_configs(jobs):
+    """[(method, params_key)] that stand for each method in scaling charts and tables: the
+    representative configuration, plus its path-coherent variant (coherent=true) when the
+    suite ran one, since a coherent method is its own row (docs: ARCHITECTURE, Queries)."""
+    from style import method_sort_key  # local: keeps this module free of plotting imports
+    reps = representative_configs(jobs)
+    keys = {}
+    for j in jobs:
+        keys.setdefault(j.method, set()).add(j.params_key)
+    out = []
+    for method in sorted(reps, key=method_sort_key):
+        rep = reps[method]
+        out.append((method, rep))
+        out += [(method, k) for k in sorted(keys[method])
+                if k != rep and is_coherent(k) and not is_coherent(rep)
+                and _without_coherent(k) == _without_coherent(rep)]
+    return out

@@ -7,7 +7,7 @@ import io
 
 import fmt
 from metrics import METRICS
-from results_io import representative_configs
+from results_io import is_coherent, representative_configs, shown_configs
 from style import STATUS_SEVERITY, method_sort_key
 
 # Accuracy tolerances of the "Accuracy warnings" section.
@@ -163,12 +163,12 @@ RATE_COLUMNS = [("pis_random", "inside", "random"), ("pis_haptic", "inside", "ha
 def paper_rows(rs):
     """Per model and method: the figures of the paper's tables, as numbers (None = absent)."""
     jobs = rs.model_jobs()
-    reps = representative_configs(jobs)
+    configs = shown_configs(jobs)
     out = []
     for mesh in rs.meshes(jobs):
         on_mesh = [j for j in jobs if j.mesh == mesh]
-        for method in sorted({j.method for j in on_mesh}, key=method_sort_key):
-            js = [j for j in on_mesh if j.method == method and j.params_key == reps.get(method)]
+        for method, key in configs:
+            js = [j for j in on_mesh if j.method == method and j.params_key == key]
             if not js:
                 continue
             ok = [j for j in js if j.ok]
@@ -234,7 +234,7 @@ def paper_tables(rs):
         if star is None:
             continue
         for r in rs_:
-            if r is star:
+            if r["method"] == STAR:   # its own variants are not peers
                 continue
             ratios.append([mesh, fmt.count(r["triangles"]), r["config"],
                            fmt.ratio(_ratio(star["pis_random"], r["pis_random"])),

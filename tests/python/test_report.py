@@ -77,6 +77,9 @@ def test_paper_tables_have_ebp_row_ratios_and_published_figures(report):
                       if line.startswith("| bunny") and "cgal_aabb" in line and "×" in line)
     assert "| 2.5× |" in cgal_bunny
     assert "2.5 kHz" in md and "32 kHz" in md and "1 MHz" in md
+    # A path-coherent variant is its own row, and not an EBP "peer" in the ratios.
+    assert "**ebp_octree:coherent=true**" in md
+    assert "| bunny | 69.5k | ebp_octree:coherent=true |" not in md
     assert "| 7 |" in md.split("**bunny**")[0] or "**7**" in md   # octree levels
     assert r"\textbf{ebp\_octree}" in tex
     assert r"\begin{tabular}" in tex and r"\bottomrule" in tex
