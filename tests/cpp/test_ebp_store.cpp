@@ -120,7 +120,7 @@ void expect_same_answers(const Octree& t, const std::string& store, const std::v
   }
   EXPECT_EQ(bad_inside, 0) << what;
   EXPECT_EQ(bad_dist, 0) << what;
-  if (cache < 4096) {
+  if (cache < 4096 && ooc.store().directory().size() > 1) {
     EXPECT_GT(ooc.cache().evictions, 0u) << what;
   }
   EXPECT_GT(ooc.cache().misses, 0u) << what;
@@ -150,7 +150,7 @@ void check_mesh(const bvhbench::Mesh& m, const std::string& name) {
     const Octree back = r.load_all();
     EXPECT_TRUE(same_bytes(back.nodes, t.nodes) && same_bytes(back.tris, t.tris)) << name;
   }
-  const std::vector<Vec3d> pts = query_points(m, 300);
+  const std::vector<Vec3d> pts = query_points(m, 600);
   expect_same_answers(t, small, pts, 256u << 20, false, name + " small pages, large cache");
   expect_same_answers(t, small, pts, 1, false, name + " small pages, 1-byte cache");
   expect_same_answers(t, small, pts, 64 << 10, true, name + " small pages, 64 KiB cache, coherent");
