@@ -47,6 +47,7 @@
 
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "method_support.hpp"
 #include "registry.hpp"
 #include "system_info.hpp"
 
@@ -187,8 +188,7 @@ class CgalAabb final : public Method {
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     if (mesh.triangles.empty()) throw InputError("cgal_aabb: the mesh has no triangle");
     try {
-      geo_.vertices.resize(mesh.vertices.size());
-      for (std::size_t i = 0; i < mesh.vertices.size(); ++i) geo_.vertices[i] = Vec3f(mesh.vertices[i]);
+      geo_.vertices = float32_vertices(mesh.vertices);
       geo_.triangles = mesh.triangles;
       geo_.triangles.shrink_to_fit();
 
@@ -254,9 +254,7 @@ class CgalAabb final : public Method {
     r.closest = Vec3d(CGAL::to_double(best.first.x()), CGAL::to_double(best.first.y()),
                       CGAL::to_double(best.first.z()));
     r.triangle = std::int64_t(best.second);
-    const auto& t = geo_.triangles[best.second];
-    r.normal = triangle_normal(Vec3d(geo_.vertices[t[0]]), Vec3d(geo_.vertices[t[1]]),
-                               Vec3d(geo_.vertices[t[2]]));
+    r.normal = face_normal(geo_.vertices, geo_.triangles[best.second]);
     const double d = norm(r.closest - p);
     // On the surface the sign is moot, and a ray from there is degenerate by construction.
     r.distance = (d > 0 && inside_impl(q)) ? -d : d;

@@ -43,6 +43,7 @@
 
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "method_support.hpp"
 #include "registry.hpp"
 #include "system_info.hpp"
 
@@ -159,12 +160,8 @@ class Embree final : public Method {
       throw InputError("embree: more triangles than 32-bit primitive ids can address");
 
     const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-    vertices_.resize(nv + 1);  // + 1: Embree reads the last vertex with a 16-byte load
-    for (std::size_t i = 0; i < nv; ++i) {
-      vertices_[i] = Vec3f(mesh.vertices[i]);
-      bounds_.add(Vec3d(vertices_[i]));
-    }
-    vertices_[nv] = Vec3f();
+    vertices_ = float32_vertices(mesh.vertices, 1);  // + 1: Embree reads the last vertex with a 16-byte load
+    for (std::size_t i = 0; i < nv; ++i) bounds_.add(Vec3d(vertices_[i]));
     triangles_.assign(mesh.triangles.begin(), mesh.triangles.end());
     for (const auto& t : triangles_)
       if (squared_norm(cross(Vec3d(vertices_[t[1]]) - Vec3d(vertices_[t[0]]),
@@ -239,8 +236,7 @@ class Embree final : public Method {
     DistanceResult r;
     r.closest = s.best_q;
     r.triangle = s.best;
-    const auto& t = triangles_[std::size_t(s.best)];
-    r.normal = triangle_normal(Vec3d(vertices_[t[0]]), Vec3d(vertices_[t[1]]), Vec3d(vertices_[t[2]]));
+    r.normal = face_normal(vertices_, triangles_[std::size_t(s.best)]);
     const double d = std::sqrt(s.best_d2);
     r.distance = (d > 0 && inside_impl(p)) ? -d : d;
     if (opt_.coherent) {
