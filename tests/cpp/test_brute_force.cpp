@@ -6,32 +6,15 @@
 
 #include "mesh.hpp"
 #include "registry.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 
 namespace {
 
-/// Unit cube [0,1]^3, outward-oriented, 12 triangles.
-Mesh unit_cube() {
-  Mesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  m.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                 {2, 3, 7}, {2, 7, 6}, {1, 2, 6}, {1, 6, 5}, {0, 4, 7}, {0, 7, 3}};
-  return m;
-}
-
-Mesh one_triangle() {
-  Mesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  m.triangles = {{0, 1, 2}};
-  return m;
-}
-
-std::unique_ptr<Method> built(const Mesh& mesh) {
-  auto m = Registry::global().create("brute_force");
-  m->build(mesh, BuildContext{});
-  return m;
-}
+/// brute_force built with a default BuildContext (query type inside).
+std::unique_ptr<Method> built(const Mesh& mesh) { return build_method("brute_force", mesh, QueryType::inside); }
 
 }  // namespace
 
@@ -86,8 +69,7 @@ TEST(BruteForce, OpenSurfaceWindingIsFractional) {
   // A cube without its top. Inside, w = 1 - (solid angle of the opening) / 4 pi: close to 1 near
   // the bottom, just above 1/2 right under the opening (which subtends almost a half-space);
   // above the opening w = (solid angle of the walls seen from outside) / 4 pi < 1/2.
-  Mesh cup = unit_cube();
-  cup.triangles.erase(cup.triangles.begin() + 2, cup.triangles.begin() + 4);
+  Mesh cup = open_cup();
   auto m = built(cup);
   EXPECT_TRUE(m->inside({0.5, 0.5, 0.05}));
   EXPECT_TRUE(m->inside({0.5, 0.5, 0.99}));

@@ -13,8 +13,10 @@
 #include "errors.hpp"
 #include "mesh.hpp"
 #include "sha256.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 
 namespace {
 
@@ -41,25 +43,13 @@ void expect_square_and_tri(const Mesh& m, bool float_coords) {
   EXPECT_EQ(m.sha256, sha256_file(m.path));
 }
 
-/// Loads `path` expecting an InputError whose message names the file and contains `problem`.
+/// Loads fixture `name` expecting an InputError whose message names the file and contains
+/// `problem`.
 void expect_rejected(const std::string& name, const std::string& problem) {
-  SCOPED_TRACE(name);
-  try {
-    load_mesh(fixture(name));
-    ADD_FAILURE() << "loaded without error";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find(name), std::string::npos) << msg;
-    EXPECT_NE(msg.find(problem), std::string::npos) << "expected '" << problem << "' in: " << msg;
-  }
+  expect_input_error([&] { load_mesh(fixture(name)); }, name, problem);
 }
 
 std::string temp_path(const std::string& name) { return testing::TempDir() + "bvhbench_mesh_io_" + name; }
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream f(path, std::ios::binary);
-  f.write(bytes.data(), std::streamsize(bytes.size()));
-}
 
 }  // namespace
 
@@ -110,9 +100,8 @@ TEST(MeshIo, DegenerateAndDuplicateTrianglesAreKept) {
 
 TEST(MeshIo, FormatIsSniffedWhenTheExtensionIsUnknown) {
   const std::string ply = temp_path("sniff.mesh"), obj = temp_path("sniff.txt");
-  std::ifstream in(fixture("good_binary_be.ply"), std::ios::binary);
-  write_bytes(ply, std::string(std::istreambuf_iterator<char>(in), {}));
-  write_bytes(obj, "# obj\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  write_file_bytes(ply, read_file_bytes(fixture("good_binary_be.ply")));
+  write_file_bytes(obj, "# obj\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   expect_square_and_tri([&] { Mesh m = load_mesh(ply); return m; }(), true);
   EXPECT_EQ(load_mesh(obj).triangles.size(), 1u);
   std::remove(ply.c_str());
@@ -121,7 +110,7 @@ TEST(MeshIo, FormatIsSniffedWhenTheExtensionIsUnknown) {
 
 TEST(MeshIo, ExtensionIsCaseInsensitive) {
   const std::string path = temp_path("upper.OBJ");
-  write_bytes(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  write_file_bytes(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   EXPECT_EQ(load_mesh(path).triangles.size(), 1u);
   std::remove(path.c_str());
 }
@@ -156,7 +145,7 @@ TEST(MeshIo, BinaryPlyEveryIntegerTypeAndByteOrder) {
           for (int i : f) put(s, std::uint64_t(i), it.size, big);
         }
         const std::string path = temp_path("types.ply");
-        write_bytes(path, s);
+        write_file_bytes(path, s);
         const Mesh m = load_mesh(path);
         EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 4}, {0, 1, 2}, {0, 2, 3}, {4, 3, 2}}));
         EXPECT_EQ(m.vertices[4], Vec3d(double(0.1f), double(0.2f), double(0.3f)));
@@ -290,12 +279,11 @@ TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", 
 // Prefixes of good files are rejected cleanly or read consistently (never a crash or a hang).
 TEST(MeshIoRejects, EveryTruncationOfABinaryFile) {
   for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj"}) {
-    std::ifstream in(fixture(name), std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::string bytes = read_file_bytes(fixture(name));
     const std::string ext = std::string(name).substr(std::string(name).rfind('.'));
     const std::string path = temp_path("prefix" + ext);
     for (std::size_t n = 0; n < bytes.size(); n += 3) {
-      write_bytes(path, bytes.substr(0, n));
+      write_file_bytes(path, bytes.substr(0, n));
       try {
         const Mesh m = load_mesh(path);
         // An OBJ or an ASCII prefix can still be a valid, smaller mesh; it must be consistent.

@@ -14,8 +14,10 @@
 
 #include "errors.hpp"
 #include "npy.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 
 namespace {
 
@@ -27,22 +29,6 @@ std::vector<T> values(const NpyArray& a) {
   std::vector<T> v(a.size());
   if (!v.empty()) std::memcpy(v.data(), a.data.data(), v.size() * sizeof(T));
   return v;
-}
-
-void expect_rejected(const std::function<void()>& f, const std::string& name, const std::string& problem) {
-  try {
-    f();
-    ADD_FAILURE() << name << ": no error";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find(name), std::string::npos) << msg;
-    EXPECT_NE(msg.find(problem), std::string::npos) << "expected '" << problem << "' in: " << msg;
-  }
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
 bool have_numpy() {
@@ -109,7 +95,7 @@ TEST(Npy, RoundTripEveryDtype) {
     EXPECT_EQ(r.shape, a.shape);
     EXPECT_EQ(r.data, a.data);
     const std::string bytes = npy_bytes(a);
-    EXPECT_EQ(bytes, slurp(path));
+    EXPECT_EQ(bytes, read_file_bytes(path));
     EXPECT_EQ(bytes.size() % 64, a.data.size() % 64) << "the data is not 64-byte aligned";
     const NpyArray p = parse_npy(bytes.data(), bytes.size(), "mem");
     EXPECT_EQ(p.data, a.data);
@@ -192,7 +178,7 @@ TEST(NpyNumpy, ReadsNpyFiles) {
 TEST(NpyNumpy, OurNpyBytesEqualNumpys) {
   // np.save of the same (4, 3) float64 array: identical bytes, header included.
   const std::vector<Vec3d> pts = {{0, 1, 2}, {-1.5, 0.25, 1e-3}, {3, 4, 5}, {0.1, 0.2, 0.3}};
-  EXPECT_EQ(npy_bytes(NpyArray::f8_n3(pts)), slurp(fixture("points.npy")));
+  EXPECT_EQ(npy_bytes(NpyArray::f8_n3(pts)), read_file_bytes(fixture("points.npy")));
 }
 
 TEST(NpyNumpy, ReadsSavez) { expect_fixture_arrays(read_npz(fixture("savez.npz"))); }
@@ -228,47 +214,47 @@ TEST(NpyNumpy, NumpyReadsOurNpz) {
 // ---- malformed ----
 
 TEST(NpyRejects, PointsWithTheWrongDtypeOrShape) {
-  expect_rejected([] { read_points_npy(fixture("points_f4.npy")); }, "points_f4.npy", "dtype <f4 and shape (4, 3)");
-  expect_rejected([] { read_points_npy(fixture("points_n4.npy")); }, "points_n4.npy", "dtype <f8 and shape (2, 4)");
+  expect_input_error([] { read_points_npy(fixture("points_f4.npy")); }, "points_f4.npy", "dtype <f4 and shape (4, 3)");
+  expect_input_error([] { read_points_npy(fixture("points_n4.npy")); }, "points_n4.npy", "dtype <f8 and shape (2, 4)");
 }
 TEST(NpyRejects, NanPoint) {
-  expect_rejected([] { read_points_npy(fixture("points_nan.npy")); }, "points_nan.npy", "point 1 has a NaN coordinate");
+  expect_input_error([] { read_points_npy(fixture("points_nan.npy")); }, "points_nan.npy", "point 1 has a NaN coordinate");
 }
 TEST(NpyRejects, FortranOrder) {
-  expect_rejected([] { read_npy(fixture("fortran.npy")); }, "fortran.npy", "fortran_order");
+  expect_input_error([] { read_npy(fixture("fortran.npy")); }, "fortran.npy", "fortran_order");
 }
 TEST(NpyRejects, ObjectDtype) {
-  expect_rejected([] { read_npy(fixture("object.npy")); }, "object.npy", "unsupported dtype '|O'");
+  expect_input_error([] { read_npy(fixture("object.npy")); }, "object.npy", "unsupported dtype '|O'");
 }
 TEST(NpyRejects, TruncatedNpy) {
-  expect_rejected([] { read_npy(fixture("bad_truncated.npy")); }, "bad_truncated.npy", "truncated");
+  expect_input_error([] { read_npy(fixture("bad_truncated.npy")); }, "bad_truncated.npy", "truncated");
 }
 TEST(NpyRejects, BadMagic) {
-  expect_rejected([] { read_npy(fixture("bad_magic.npy")); }, "bad_magic.npy", "bad magic");
+  expect_input_error([] { read_npy(fixture("bad_magic.npy")); }, "bad_magic.npy", "bad magic");
 }
 TEST(NpyRejects, MissingFile) {
-  expect_rejected([] { read_npy(fixture("nope.npy")); }, "nope.npy", "not found");
-  expect_rejected([] { read_npz(fixture("nope.npz")); }, "nope.npz", "not found");
+  expect_input_error([] { read_npy(fixture("nope.npy")); }, "nope.npy", "not found");
+  expect_input_error([] { read_npz(fixture("nope.npz")); }, "nope.npz", "not found");
 }
 TEST(NpyRejects, TruncatedNpz) {
-  expect_rejected([] { read_npz(fixture("bad_truncated.npz")); }, "bad_truncated.npz", "truncated");
+  expect_input_error([] { read_npz(fixture("bad_truncated.npz")); }, "bad_truncated.npz", "truncated");
 }
 TEST(NpyRejects, CorruptNpz) {
-  expect_rejected([] { read_npz(fixture("bad_crc.npz")); }, "bad_crc.npz", "CRC-32 mismatch");
+  expect_input_error([] { read_npz(fixture("bad_crc.npz")); }, "bad_crc.npz", "CRC-32 mismatch");
 }
 TEST(NpyRejects, NpyGivenAsNpz) {
-  expect_rejected([] { read_npz(fixture("points.npy")); }, "points.npy", "not an .npz");
+  expect_input_error([] { read_npz(fixture("points.npy")); }, "points.npy", "not an .npz");
 }
 TEST(NpyRejects, ParseNpyNamesTheSource) {
-  const std::string bytes = slurp(fixture("points.npy"));
-  expect_rejected([&] { parse_npy(bytes.data(), bytes.size() - 1, "the-name"); }, "the-name", "truncated");
-  expect_rejected([&] { parse_npy(bytes.data(), 5, "the-name"); }, "the-name", "truncated");
+  const std::string bytes = read_file_bytes(fixture("points.npy"));
+  expect_input_error([&] { parse_npy(bytes.data(), bytes.size() - 1, "the-name"); }, "the-name", "truncated");
+  expect_input_error([&] { parse_npy(bytes.data(), 5, "the-name"); }, "the-name", "truncated");
 }
 
 // Every prefix and many corruptions of NumPy-made files are rejected cleanly, never a crash.
 TEST(NpyRejects, EveryPrefixAndByteFlip) {
   for (const char* name : {"savez.npz", "savez_compressed.npz", "points.npy"}) {
-    const std::string bytes = slurp(fixture(name));
+    const std::string bytes = read_file_bytes(fixture(name));
     const bool npz = std::string(name).find(".npz") != std::string::npos;
     const std::string path = temp_path(npz ? "fuzz.npz" : "fuzz.npy");
     auto attempt = [&](const std::string& b) {

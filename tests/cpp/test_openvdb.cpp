@@ -21,15 +21,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <random>
 #include <string>
 
 #include "errors.hpp"
 #include "mesh.hpp"
 #include "registry.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 
 namespace {
 
@@ -37,47 +37,6 @@ const MethodInfo* openvdb_info() { return Registry::global().find("openvdb"); }
 
 #define SKIP_WITHOUT_OPENVDB() \
   if (!openvdb_info()) GTEST_SKIP() << "openvdb method not built"
-
-/// Icosphere of radius r: 20 * 4^level triangles, outward.
-Mesh sphere(int level, double r = 1.0) {
-  Mesh m;
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  m.vertices = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
-    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.vertices.push_back((m.vertices[a] + m.vertices[b]) * 0.5);
-      return mid[key] = std::uint32_t(m.vertices.size() - 1);
-    };
-    std::vector<std::array<std::uint32_t, 3>> next;
-    for (auto f : m.triangles) {
-      std::uint32_t ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
-      next.push_back({f[0], ab, ca});
-      next.push_back({f[1], bc, ab});
-      next.push_back({f[2], ca, bc});
-      next.push_back({ab, bc, ca});
-    }
-    m.triangles = std::move(next);
-  }
-  for (auto& v : m.vertices) v = normalized(v) * r;
-  return m;
-}
-
-std::vector<Vec3d> random_points(const Box3d& b, double margin, int n, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Vec3d lo = b.lo - b.extent() * margin, ext = b.extent() * (1 + 2 * margin);
-  std::vector<Vec3d> p(n);
-  for (auto& q : p) q = lo + Vec3d(u(rng) * ext.x, u(rng) * ext.y, u(rng) * ext.z);
-  return p;
-}
 
 BuildContext context(QueryType qt, const std::vector<Vec3d>& pts) {
   BuildContext ctx;
@@ -92,12 +51,6 @@ double angle_deg(const Vec3d& a, const Vec3d& b) {
   return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
 }
 
-/// Distance from p to triangle t of the mesh.
-double tri_distance(const Mesh& m, std::int64_t t, const Vec3d& p) {
-  const auto& f = m.triangles[std::size_t(t)];
-  return norm(p - closest_point_on_triangle(p, m.vertices[f[0]], m.vertices[f[1]], m.vertices[f[2]]));
-}
-
 struct Stats {
   int n = 0, inside_checked = 0, inside_wrong = 0;
   double max_err = 0, sum_err = 0;
@@ -107,8 +60,7 @@ struct Stats {
 
 /// Compares openvdb (spec) with brute_force on `pts`; errors are in voxels.
 Stats compare(const Mesh& mesh, const std::string& spec, const std::vector<Vec3d>& pts) {
-  auto bf = Registry::global().create("brute_force");
-  bf->build(mesh, BuildContext{});
+  auto bf = build_method("brute_force", mesh, QueryType::inside);  // BuildContext{}
   auto vin = Registry::global().create(spec);
   vin->build(mesh, context(QueryType::inside, pts));
   auto vd = Registry::global().create(spec);
@@ -136,7 +88,7 @@ Stats compare(const Mesh& mesh, const std::string& spec, const std::vector<Vec3d
     }
     if (std::abs(bf->distance(got.closest).distance) <= v) ++s.closest_ok;
     if (got.triangle == ref.triangle) ++s.tri_exact;
-    if (got.triangle >= 0 && tri_distance(mesh, got.triangle, p) <= std::abs(ref.distance) + 1.0 * v) ++s.tri_near;
+    if (got.triangle >= 0 && distance_to_triangle(mesh, got.triangle, p) <= std::abs(ref.distance) + 1.0 * v) ++s.tri_near;
   }
   return s;
 }
@@ -179,7 +131,7 @@ TEST(OpenVdb, ListedWithParameters) {
 
 TEST(OpenVdb, SphereAgainstBruteForce) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(3);
+  Mesh m = icosphere(3);
   expect_close_to_brute_force(m, "sphere", coarse(m), 1.0);
   expect_close_to_brute_force(m, "sphere", coarse(m, ",order=2"), 1.5);
 }
@@ -188,23 +140,17 @@ class OpenVdbSharedMesh : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(OpenVdbSharedMesh, AgainstBruteForce) {
   SKIP_WITHOUT_OPENVDB();
-  const std::string path = std::string(BVHBENCH_SHARED_DIR) + "/meshes/" + GetParam();
-  Mesh m = load_mesh(path);
+  Mesh m = load_shared_mesh(GetParam());
   expect_close_to_brute_force(m, GetParam(), coarse(m), 1.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(ClosedMeshes, OpenVdbSharedMesh,
                          ::testing::Values("cow.obj", "fandisk.obj", "homer.obj", "rocker-arm.obj"),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           s = s.substr(0, s.find('.'));
-                           s.erase(std::remove(s.begin(), s.end(), '-'), s.end());
-                           return s;
-                         });
+                         [](const auto& info) { return mesh_stem(info.param, ""); });
 
 TEST(OpenVdb, NarrowBandStillAnswersInsideFarFromTheSurface) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(3);
+  Mesh m = icosphere(3);
   auto v = Registry::global().create("openvdb:voxel_abs=0.02");
   std::vector<Vec3d> pts = {{0, 0, 0}, {3, 3, 3}};
   v->build(m, context(QueryType::inside, pts));
@@ -217,7 +163,7 @@ TEST(OpenVdb, NarrowBandStillAnswersInsideFarFromTheSurface) {
 
 TEST(OpenVdb, FixedBandClampsAndSaysSo) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(3);
+  Mesh m = icosphere(3);
   auto v = Registry::global().create("openvdb:voxel_abs=0.02,band=fixed,ex_band=3,in_band=3");
   std::vector<Vec3d> pts = {{0, 0, 0}, {3, 3, 3}};
   v->build(m, context(QueryType::distance, pts));
@@ -275,7 +221,7 @@ TEST(OpenVdb, OneTriangleQueryOnVertexAndFarAway) {
 
 TEST(OpenVdb, QueryOnAVertexOfAClosedMesh) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(3);
+  Mesh m = icosphere(3);
   auto v = Registry::global().create(coarse(m));
   const Vec3d p = m.vertices[m.triangles[7][1]];
   v->build(m, context(QueryType::distance, {p, p * 1.5, p * 0.5}));
@@ -285,19 +231,18 @@ TEST(OpenVdb, QueryOnAVertexOfAClosedMesh) {
   EXPECT_LE(norm(d.closest - p), vox);
   EXPECT_GT(dot(d.normal, normalized(p)), 0.95);
   ASSERT_GE(d.triangle, 0);
-  EXPECT_LE(tri_distance(m, d.triangle, p), vox);
+  EXPECT_LE(distance_to_triangle(m, d.triangle, p), vox);
 }
 
 TEST(OpenVdb, DegenerateAndDuplicateTriangles) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(2);
+  Mesh m = icosphere(2);
   const std::size_t n = m.triangles.size();
   for (std::size_t i = 0; i < n; i += 7) m.triangles.push_back(m.triangles[i]);  // duplicates
   m.triangles.push_back({0, 0, 1});  // zero area (collapsed edge)
   m.triangles.push_back({3, 3, 3});  // a point
   auto pts = random_points(m.bounds(), 0.1, 200, 7);
-  auto bf = Registry::global().create("brute_force");
-  bf->build(m, BuildContext{});
+  auto bf = build_method("brute_force", m, QueryType::inside);  // BuildContext{}
   for (QueryType qt : {QueryType::inside, QueryType::distance}) {
     auto v = Registry::global().create("openvdb:voxel_abs=0.03");
     ASSERT_NO_THROW(v->build(m, context(qt, pts)));
@@ -333,7 +278,7 @@ TEST(OpenVdb, AllDegenerateMeshDoesNotCrash) {
 
 TEST(OpenVdb, RefusesOverTheVoxelCap) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(2);
+  Mesh m = icosphere(2);
   auto v = Registry::global().create("openvdb:voxel_abs=0.001,max_voxels=1000000");
   std::vector<Vec3d> pts = {{-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}};
   try {
@@ -346,7 +291,7 @@ TEST(OpenVdb, RefusesOverTheVoxelCap) {
 
 TEST(OpenVdb, BandAutoCoversTheQueryBoxForDistance) {
   SKIP_WITHOUT_OPENVDB();
-  Mesh m = sphere(3);
+  Mesh m = icosphere(3);
   auto v = Registry::global().create("openvdb:voxel_abs=0.1");
   std::vector<Vec3d> pts = {{-3, -3, -3}, {3, 3, 3}};
   v->build(m, context(QueryType::distance, pts));

@@ -16,52 +16,19 @@
 #include "mesh.hpp"
 #include "query_kinds_detail.hpp"
 #include "query_set.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 namespace qd = bvhbench::query_kinds_detail;
 
 namespace {
-
-/// Unit sphere from an octahedron subdivided `levels` times (8 * 4^levels triangles), outward.
-Mesh sphere(int levels) {
-  Mesh m;
-  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
-    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.vertices.push_back(normalized((m.vertices[a] + m.vertices[b]) * 0.5));
-      return mid[key] = std::uint32_t(m.vertices.size() - 1);
-    };
-    std::vector<std::array<std::uint32_t, 3>> next;
-    for (auto t : m.triangles) {
-      auto ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
-      next.push_back({t[0], ab, ca});
-      next.push_back({t[1], bc, ab});
-      next.push_back({t[2], ca, bc});
-      next.push_back({ab, bc, ca});
-    }
-    m.triangles = next;
-  }
-  m.sha256 = "sphere" + std::to_string(levels);
-  return m;
-}
 
 /// The unit square in z = 0 (normal +z), two triangles.
 Mesh square() {
   Mesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 2}, {0, 2, 3}};
-  return m;
-}
-
-Mesh one_triangle() {
-  Mesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  m.triangles = {{0, 1, 2}};
   return m;
 }
 
@@ -98,7 +65,7 @@ TEST(QueryKinds, AllFourAreRegistered) {
 }
 
 TEST(QueryKinds, EveryKindIsDeterministicAndRecordsItsParameters) {
-  const Mesh m = sphere(3);
+  const Mesh m = octasphere(3);
   for (const QueryKind& k : query_kinds()) {
     nlohmann::json meta1, meta2, meta3;
     auto a = generate_queries(m, k.name, 3000, 7, {}, &meta1);
@@ -116,7 +83,7 @@ TEST(QueryKinds, EveryKindIsDeterministicAndRecordsItsParameters) {
 }
 
 TEST(QueryKinds, ParametersChangeTheOutputAndUnknownOnesAreRejected) {
-  const Mesh m = sphere(2);
+  const Mesh m = octasphere(2);
   auto a = generate_queries(m, "near", 500, 1, {}, nullptr);
   auto b = generate_queries(m, "near", 500, 1, {{"sigma", 0.02}}, nullptr);
   EXPECT_FALSE(same_bytes(a, b));
@@ -127,7 +94,7 @@ TEST(QueryKinds, ParametersChangeTheOutputAndUnknownOnesAreRejected) {
 }
 
 TEST(QueryKinds, RandomStaysInTheBoxEnlargedByTenPercent) {
-  const Mesh m = sphere(2);  // box [-1, 1]^3: enlarged, [-1.2, 1.2]^3
+  const Mesh m = octasphere(2);  // box [-1, 1]^3: enlarged, [-1.2, 1.2]^3
   auto pts = generate_queries(m, "random", 20000, 3, {}, nullptr);
   std::size_t outside_box = 0;
   for (const Vec3d& p : pts) {
@@ -175,7 +142,7 @@ TEST(QueryKinds, NearIsAreaWeighted) {
 }
 
 TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
-  const Mesh m = sphere(4);
+  const Mesh m = octasphere(4);
   qd::TriangleGrid grid(m, 0.05);
   Rng rng(11);
   for (int i = 0; i < 400; ++i) {
@@ -193,7 +160,7 @@ TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
 }
 
 TEST(QueryKinds, HapticHasNoJumpsInsideEpisodesAndStaysInTheContactBand) {
-  const Mesh m = sphere(4);  // 2048 triangles, diagonal 2 sqrt(3) = "30 cm"
+  const Mesh m = octasphere(4);  // 2048 triangles, diagonal 2 sqrt(3) = "30 cm"
   const QueryKind* k = find_query_kind("haptic");
   const qd::HapticLayout L = qd::haptic_layout(m, k->defaults);
   ASSERT_EQ(L.approach, 150u);  // 1.5 * 20 mm / 0.2 m/s at 1 kHz
@@ -256,7 +223,7 @@ TEST(QueryKinds, HapticFollowsTheSurfaceOfANonConvexModel) {
 }
 
 TEST(QueryKinds, SurfacePointsAreOnTheMeshToFloatPrecision) {
-  const Mesh m = sphere(3);
+  const Mesh m = octasphere(3);
   const std::size_t n = 6000;
   auto pts = generate_queries(m, "surface", n, 6, {}, nullptr);
   std::set<std::array<double, 3>> verts;

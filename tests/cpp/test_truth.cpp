@@ -14,39 +14,16 @@
 #include "mesh.hpp"
 #include "oracle.hpp"
 #include "registry.hpp"
+#include "test_support.hpp"
 
 using namespace bvhbench;
+using namespace bvhbench::test;
 
 namespace {
 
-/// Unit cube [0,1]^3, outward-oriented, 12 triangles.
-Mesh unit_cube() {
-  Mesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  m.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                 {2, 3, 7}, {2, 7, 6}, {1, 2, 6}, {1, 6, 5}, {0, 4, 7}, {0, 7, 3}};
-  return m;
-}
-
-/// The cube without its top (z = 1) face: an open cup.
-Mesh open_cup() {
-  Mesh m = unit_cube();
-  m.triangles.erase(m.triangles.begin() + 2, m.triangles.begin() + 4);
-  return m;
-}
-
-Mesh one_triangle() {
-  Mesh m;
-  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  m.triangles = {{0, 1, 2}};
-  return m;
-}
-
-Mesh shared_mesh(const std::string& name) {
-  return load_mesh(std::string(BVHBENCH_SHARED_DIR) + "/meshes/" + name);
-}
-
-std::vector<Vec3d> random_points(const Mesh& m, std::size_t n, unsigned seed, double margin = 0.2) {
+/// n points uniform in the mesh's box grown by `margin` times its extent each way, drawn axis
+/// by axis. Not test::random_points: its arithmetic differs, and these cases keep their points.
+std::vector<Vec3d> random_points_around(const Mesh& m, std::size_t n, unsigned seed, double margin = 0.2) {
   Box3d b = m.bounds();
   Vec3d e = b.extent();
   std::mt19937_64 rng(seed);
@@ -81,11 +58,8 @@ std::vector<Vec3d> surface_points(const Mesh& m, std::size_t n, unsigned seed) {
   return pts;
 }
 
-std::unique_ptr<Method> brute(const Mesh& mesh) {
-  auto m = Registry::global().create("brute_force");
-  m->build(mesh, BuildContext{});
-  return m;
-}
+/// brute_force built with a default BuildContext (query type inside).
+std::unique_ptr<Method> brute(const Mesh& mesh) { return build_method("brute_force", mesh, QueryType::inside); }
 
 /// Generalized winding number by direct summation (what brute_force thresholds).
 double brute_winding(const Mesh& m, const Vec3d& p) {
@@ -122,7 +96,9 @@ void check_against_brute_force(const Mesh& mesh, const std::vector<Vec3d>& pts, 
         ++compared_inside;
       }
     }
-    if (expect_closed) EXPECT_EQ(a.winding[i], std::round(a.winding[i]));
+    if (expect_closed) {
+      EXPECT_EQ(a.winding[i], std::round(a.winding[i]));
+    }
   }
   EXPECT_GT(compared_inside, pts.size() / 2);
 }
@@ -131,7 +107,7 @@ void check_against_brute_force(const Mesh& mesh, const std::vector<Vec3d>& pts, 
 
 TEST(Truth, CubeAgainstBruteForce) {
   Mesh m = unit_cube();
-  auto pts = random_points(m, 2000, 1);
+  auto pts = random_points_around(m, 2000, 1);
   auto s = surface_points(m, 400, 2);
   pts.insert(pts.end(), s.begin(), s.end());
   check_against_brute_force(m, pts, true);
@@ -176,7 +152,7 @@ TEST(Truth, InvertedCubeIsStillSolid) {
 
 TEST(Truth, OpenCupAgainstBruteForce) {
   Mesh m = open_cup();
-  auto pts = random_points(m, 2000, 3);
+  auto pts = random_points_around(m, 2000, 3);
   auto s = surface_points(m, 400, 4);
   pts.insert(pts.end(), s.begin(), s.end());
   check_against_brute_force(m, pts, false);
@@ -189,7 +165,7 @@ TEST(Truth, OpenCupAgainstBruteForce) {
 
 TEST(Truth, SingleTriangle) {
   Mesh m = one_triangle();
-  auto pts = random_points(m, 500, 5, 1.0);
+  auto pts = random_points_around(m, 500, 5, 1.0);
   pts.push_back({0, 0, 0});
   pts.push_back({0.25, 0.25, 0});
   pts.push_back({0.25, 0.25, 1e-9});
@@ -239,24 +215,24 @@ TEST(Truth, DegenerateTrianglesAreHarmless) {
 }
 
 TEST(Truth, CowAgainstBruteForce) {
-  Mesh m = shared_mesh("cow.obj");
-  auto pts = random_points(m, 600, 7, 0.1);
+  Mesh m = load_shared_mesh("cow.obj");
+  auto pts = random_points_around(m, 600, 7, 0.1);
   auto s = surface_points(m, 200, 8);
   pts.insert(pts.end(), s.begin(), s.end());
   check_against_brute_force(m, pts, true);
 }
 
 TEST(Truth, BunnyOpenAgainstBruteForce) {
-  Mesh m = shared_mesh("stanford-bunny.obj");
-  auto pts = random_points(m, 150, 9, 0.1);
+  Mesh m = load_shared_mesh("stanford-bunny.obj");
+  auto pts = random_points_around(m, 150, 9, 0.1);
   auto s = surface_points(m, 50, 10);
   pts.insert(pts.end(), s.begin(), s.end());
   check_against_brute_force(m, pts, false);
 }
 
 TEST(Truth, OracleFileAndAccuracy) {
-  Mesh m = shared_mesh("cow.obj");
-  auto pts = random_points(m, 300, 11, 0.1);
+  Mesh m = load_shared_mesh("cow.obj");
+  auto pts = random_points_around(m, 300, 11, 0.1);
   Oracle o(m);
   OracleAnswers oa = o.answer(pts);
   const std::string path =
