@@ -253,9 +253,18 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
       counters.planes_tested += lf.tri_count;
       for (std::uint32_t k = lf.tri_begin, e = lf.tri_begin + lf.tri_count; k < e; ++k) {
         const LeafTri& t = tris[k];
-        // The face plane is a lower bound of the triangle's distance.
+        // Two cheap lower bounds of the triangle's distance: its face plane (tight when p is
+        // over the face), its bounding box (tight when p is far from a flat patch, where every
+        // face plane is at about the same distance).
         const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
         if (double(std::fabs(s)) - eps > best) continue;
+        double bd2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double lo = double(std::min({t.a[a], t.b[a], t.c[a]})), hi = double(std::max({t.a[a], t.b[a], t.c[a]}));
+          const double v = std::max({lo - p[a], 0.0, p[a] - hi});
+          bd2 += v * v;
+        }
+        if (bd2 * (1.0 - 1e-12) > best2) continue;
         test_tri(k);
       }
       continue;
