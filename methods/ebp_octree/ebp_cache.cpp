@@ -65,7 +65,9 @@ PageCache::Entry& PageCache::get(std::uint32_t id) {
   auto e = std::make_unique<Entry>();
   e->page = store_.load_page(id, &bytes_read);
   e->query.emplace(e->page->tree, coherent_);
-  e->bytes = e->page->bytes() + std::size_t(e->page->tree.num_triangles) * sizeof(std::uint32_t) + sizeof(Entry);
+  e->stamp.assign(e->page->tree.num_triangles, 0);
+  e->bytes = e->page->bytes() + std::size_t(e->page->tree.num_triangles) * (sizeof(std::uint32_t) + sizeof(std::uint64_t)) +
+             sizeof(Entry);
   while (tail_ != UINT32_MAX && used_ + e->bytes > budget_) evict(tail_);
   used_ += e->bytes;
   ++resident_;

@@ -2,10 +2,10 @@
 // ebp::Query::locate; a white/black top node answers at once, a page root hands the point to the
 // page's own ebp::Query (the page is an Octree in the global frame, so the same leaf is reached
 // by the same computation). Distance: branch and bound over the top tree, pages visited nearest
-// bound first and skipped when their bound exceeds the best distance so far; each page returns
-// its lexicographic minimum (squared distance, input triangle index), the minimum of those is
-// the in-memory answer (which is the lexicographic minimum over all triangles, whatever the
-// visiting order), bit for bit.
+// bound first and skipped when their bound exceeds the best distance so far; inside a page the
+// same branch and bound as Query::unsigned_distance, started with the global best. The result is
+// the lexicographic minimum of (squared distance, input triangle index) over all triangles, as
+// the in-memory answer is whatever its visiting order: the same answer, bit for bit.
 #include "ebp_ooc.hpp"
 
 #include <algorithm>
@@ -25,14 +25,14 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
   top_planes_ = store_->top_planes().data();
   root_lo_ = Vec3d(h.root_lo[0], h.root_lo[1], h.root_lo[2]);
   root_size_ = h.root_size;
-  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;
+  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;  // as Octree::build computes it
   leaf_level_ = int(h.leaf_level);
   page_stamp_.assign(store_->directory().size(), 0);
   if (cold_) store_->drop_os_cache();
 }
 
 void OutOfCore::reset_path() {
-  last_page_ = UINT32_MAX;
+  last_page_ = last_k_ = UINT32_MAX;
   if (cold_) {
     cache_.clear();
     store_->drop_os_cache();
@@ -94,34 +94,122 @@ struct TopItem {
   std::uint32_t node;
   int level;
 };
+inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
 }  // namespace
 
-DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
-  if (++query_id_ == 0) {
-    std::fill(page_stamp_.begin(), page_stamp_.end(), 0u);
-    query_id_ = 1;
-  }
-  const std::uint32_t qid = query_id_;
-  double best2 = std::numeric_limits<double>::infinity(), best = best2;
-  std::uint32_t best_tri = UINT32_MAX, best_page = UINT32_MAX;
-  DistanceAnswer ans;
+/// The best triangle so far of one distance query, over all pages.
+struct OutOfCore::Best {
+  double best2 = std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity();
+  std::uint32_t tri = UINT32_MAX;  // input triangle index
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX;
+  Vec3d closest;
+  float a[3], b[3], c[3];
+};
 
+// Branch and bound inside one page, started with the global best (an upper bound that keeps its
+// ties: pruning is by `bound > best` only). The same lower bounds, the same exact point-triangle
+// distance, the same tie rule as Query::unsigned_distance; only the initial bound differs, which
+// ebp::Query has no entry point for (see OUT_OF_CORE.md).
+void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& bst) {
+  const Octree& t = e.page->tree;
+  const std::uint32_t* gtri = e.page->global_tri.data();
+  std::uint64_t* stamp = e.stamp.data();
+  const std::uint64_t qid = query_id_;
+  const LeafTri* tris = t.tris.data();
+  QueryCounters& cnt = top_counters_;
+  auto test_tri = [&](std::uint32_t k) {
+    const LeafTri& tr = tris[k];
+    if (stamp[tr.tri] == qid) return;
+    stamp[tr.tri] = qid;
+    ++cnt.triangles_tested;
+    const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(tr.a), to_d(tr.b), to_d(tr.c));
+    const double d2 = squared_norm(q - p);
+    const std::uint32_t g = gtri[tr.tri];
+    if (d2 < bst.best2 || (d2 == bst.best2 && g < bst.tri)) {
+      bst.best2 = d2;
+      bst.best = std::sqrt(d2);
+      bst.tri = g;
+      bst.page = id;
+      bst.k = k;
+      bst.closest = q;
+      for (int i = 0; i < 3; ++i) { bst.a[i] = tr.a[i]; bst.b[i] = tr.b[i]; bst.c[i] = tr.c[i]; }
+    }
+  };
+  if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) test_tri(last_k_);
+
+  const Vec3d pr = p - t.root_centre;
+  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
+  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t.root_size);
+  const Plane* planes = t.planes.data();
+  const Node* nodes = t.nodes.data();
+  auto lower_bound = [&](const Node& nd, const Vec3d& lo, double size) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+      d2 += v * v;
+    }
+    double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
+      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    cnt.planes_tested += nd.plane_count;
+    return std::max(b, double(m) - slack);
+  };
+  TopItem stack[8 * (kMaxLevel + 2)];
+  int sp = 0;
+  stack[sp++] = {t.root_lo, lower_bound(nodes[0], t.root_lo, t.root_size), 0u, 0};
+  while (sp > 0) {
+    const TopItem it = stack[--sp];
+    if (it.bound > bst.best) continue;
+    const Node& nd = nodes[it.node];
+    ++cnt.nodes_visited;
+    if (nd.kind == NodeKind::leaf) {
+      const Leaf& lf = t.leaves[nd.index];
+      const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+                  pz = float(p.z - double(lf.centre[2]));
+      const double eps = double(lf.eps);
+      cnt.planes_tested += lf.tri_count;
+      for (std::uint32_t k = lf.tri_begin, end = lf.tri_begin + lf.tri_count; k < end; ++k) {
+        const LeafTri& tr = tris[k];
+        const float s = tr.n[0] * px + tr.n[1] * py + tr.n[2] * pz - tr.d;
+        if (double(std::fabs(s)) - eps > bst.best) continue;
+        test_tri(k);
+      }
+      continue;
+    }
+    if (nd.kind != NodeKind::inner) continue;
+    const int cl = it.level + 1;
+    const double csz = t.cell_size(cl);
+    TopItem kids[8];
+    int nk = 0;
+    for (int o = 0; o < 8; ++o) {
+      const std::uint32_t ci = t.children[nd.index + std::uint32_t(o)];
+      const Node& cn = nodes[ci];
+      if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
+      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+      const double b = lower_bound(cn, lo, csz);
+      if (b > bst.best) continue;
+      kids[nk++] = {lo, b, ci, cl};
+    }
+    for (int a = 1; a < nk; ++a) {
+      TopItem x = kids[a];
+      int b = a - 1;
+      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+      kids[b + 1] = x;
+    }
+    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+  }
+}
+
+DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
+  const std::uint64_t qid = ++query_id_;
+  Best bst;
   auto visit_page = [&](std::uint32_t id) {
     if (page_stamp_[id] == qid) return;
     page_stamp_[id] = qid;
-    PageCache::Entry& e = cache_.get(id);
-    const DistanceAnswer a = e.query->unsigned_distance(p);
-    if (a.triangle < 0) return;
-    const std::uint32_t g = e.page->global_tri[std::size_t(a.triangle)];
-    const double d2 = squared_norm(a.closest - p);  // the very expression the page query minimised
-    if (d2 < best2 || (d2 == best2 && g < best_tri)) {
-      best2 = d2;
-      best = a.distance;
-      best_tri = g;
-      best_page = id;
-      ans = a;
-      ans.triangle = std::int64_t(g);
-    }
+    page_distance(id, cache_.get(id), p, bst);
   };
   if (coherent_ && last_page_ != UINT32_MAX) visit_page(last_page_);
 
@@ -148,7 +236,7 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
   stack[sp++] = {root_lo_, lower_bound(top_[0], root_lo_, root_size_), 0u, 0};
   while (sp > 0) {
     const TopItem it = stack[--sp];
-    if (it.bound > best) continue;
+    if (it.bound > bst.best) continue;
     const TopNode& nd = top_[it.node];
     ++top_counters_.nodes_visited;
     if (nd.kind == TopKind::page) {
@@ -166,7 +254,7 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
       if (cn.kind == TopKind::white || cn.kind == TopKind::black) continue;
       const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
       const double b = lower_bound(cn, lo, csz);
-      if (b > best) continue;
+      if (b > bst.best) continue;
       kids[nk++] = {lo, b, ci, cl};
     }
     for (int a = 1; a < nk; ++a) {  // descending bound: nearest popped first
@@ -177,7 +265,16 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
     }
     for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
   }
-  if (coherent_) last_page_ = best_page;
+  DistanceAnswer ans;
+  if (bst.tri == UINT32_MAX) return ans;  // cannot happen: the mesh has a triangle
+  ans.distance = bst.best;
+  ans.closest = bst.closest;
+  ans.normal = bvhbench::triangle_normal(to_d(bst.a), to_d(bst.b), to_d(bst.c));
+  ans.triangle = std::int64_t(bst.tri);
+  if (coherent_) {
+    last_page_ = bst.page;
+    last_k_ = bst.k;
+  }
   return ans;
 }
 

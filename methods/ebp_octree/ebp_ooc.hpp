@@ -42,9 +42,13 @@ class OutOfCore {
   double root_size_;
   int leaf_level_;
   QueryCounters top_counters_;
-  std::vector<std::uint32_t> page_stamp_;
-  std::uint32_t query_id_ = 0;
-  std::uint32_t last_page_ = UINT32_MAX;  // coherent: page of the previous closest triangle
+  std::vector<std::uint64_t> page_stamp_;
+  std::uint64_t query_id_ = 0;
+  // coherent: page and LeafTri index (in that page) of the previous closest triangle
+  std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX;
+
+  struct Best;
+  void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
 };
 
 }  // namespace ebp
