@@ -24,8 +24,11 @@
 //    `closest_steps` projections q <- q - sdf(q) grad/|grad| starting at p; the closest triangle
 //    is the polygon index stored at the voxel nearest p (then nearest q), -1 when none.
 //  - max_voxels: the stored voxel count is estimated before building (Steiner-like shell volume
-//    bounded by the dense box) and a build that would exceed it is refused with a message
-//    instead of exhausting memory. Never a dense grid by default.
+//    bounded by the dense box). Over it, `fit=true` (default) coarsens the voxel by 10% steps
+//    until the field fits (recorded in the result's structure block: voxel_requested,
+//    voxel_size, voxel_coarsened_to_fit), so that random points far from a big model still get a
+//    field within a memory budget, at the accuracy that budget buys; `fit=false` refuses with a
+//    message instead. Never a dense grid by default.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -101,6 +104,7 @@ class OpenVdbSdf final : public Method {
         renormalize_(p.get_bool("renormalize")),
         remove_intersecting_(p.get_bool("isect_cleanup")),
         max_voxels_(double(p.get_int("max_voxels"))),
+        fit_(p.get_bool("fit")),
         threads_(int(p.get_int("threads"))) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
@@ -165,6 +169,8 @@ class OpenVdbSdf final : public Method {
     j["ex_band_world"] = ex_vox_ * voxel_;
     j["in_band_world"] = in_vox_ * voxel_;
     j["estimated_voxels"] = estimated_voxels_;
+    j["voxel_requested"] = voxel_requested_;
+    j["voxel_coarsened_to_fit"] = voxel_ > voxel_requested_;
     j["dense_query_box_voxels"] = dense_query_voxels_;
     j["active_voxels"] = sdf_ ? double(sdf_->activeVoxelCount()) : 0.0;
     j["leaf_nodes"] = sdf_ ? double(sdf_->tree().leafCount()) : 0.0;
@@ -191,41 +197,51 @@ class OpenVdbSdf final : public Method {
     voxel_ = voxel_abs_ > 0 ? voxel_abs_ : voxel_rel_ * mesh.average_edge_length();
     if (!(voxel_ > 0) || !std::isfinite(voxel_)) voxel_ = voxel_rel_ * diag / 100.0;  // all degenerate
     if (!(voxel_ > 0) || !std::isfinite(voxel_)) voxel_ = 1.0;  // a single point: any size will do
-    inv_voxel_ = 1.0 / voxel_;
     origin_ = mb.empty() ? Vec3d() : (mb.lo + mb.hi) * 0.5;
 
-    // ---- band widths (voxels) ----
-    ex_vox_ = ex_band_;
-    in_vox_ = in_band_;
-    if (auto_band_ && ctx.query_type == QueryType::distance && !ctx.query_bounds.empty()) {
-      const double reach = surface_distance_bound(mesh, ctx.query_bounds);
-      const Vec3d e = mb.extent();
-      const double half_min_extent = 0.5 * std::min({e.x, e.y, e.z});
-      // +2 voxels: the trilinear stencil and a gradient step reach one voxel beyond p.
-      ex_vox_ = std::max(ex_band_, reach * inv_voxel_ + 2.0);
-      in_vox_ = std::max(in_band_, std::min(reach, half_min_extent) * inv_voxel_ + 2.0);
-    }
-
-    // ---- estimated stored voxels, refused over max_voxels ----
+    // ---- band widths (voxels) and the estimated stored voxel count, for a voxel size ----
     const Vec3d e = mb.extent();
-    const double exw = ex_vox_ * voxel_, inw = in_vox_ * voxel_;
-    const double leaf = 8 * voxel_;  // voxels are stored in 8^3 leaves: a band is rounded up
-    const double shell = surface_area(mesh) * (exw + inw + 1.5 * leaf) +
-                         kPi * exw * exw * (e.x + e.y + e.z) + 4.0 / 3.0 * kPi * exw * exw * exw;
-    const double dense = (e.x + 2 * exw + leaf) * (e.y + 2 * exw + leaf) * (e.z + 2 * exw + leaf);
-    estimated_voxels_ = std::min(shell, dense) * inv_voxel_ * inv_voxel_ * inv_voxel_;
+    const double reach = auto_band_ && ctx.query_type == QueryType::distance && !ctx.query_bounds.empty()
+                             ? surface_distance_bound(mesh, ctx.query_bounds)
+                             : -1.0;
+    const double area = surface_area(mesh);
+    double max_index = 0;
+    auto size_for = [&](double voxel) {
+      voxel_ = voxel;
+      inv_voxel_ = 1.0 / voxel_;
+      ex_vox_ = ex_band_;
+      in_vox_ = in_band_;
+      if (reach >= 0) {
+        const double half_min_extent = 0.5 * std::min({e.x, e.y, e.z});
+        // +2 voxels: the trilinear stencil and a gradient step reach one voxel beyond p.
+        ex_vox_ = std::max(ex_band_, reach * inv_voxel_ + 2.0);
+        in_vox_ = std::max(in_band_, std::min(reach, half_min_extent) * inv_voxel_ + 2.0);
+      }
+      const double exw = ex_vox_ * voxel_, inw = in_vox_ * voxel_;
+      const double leaf = 8 * voxel_;  // voxels are stored in 8^3 leaves: a band is rounded up
+      const double shell = area * (exw + inw + 1.5 * leaf) + kPi * exw * exw * (e.x + e.y + e.z) +
+                           4.0 / 3.0 * kPi * exw * exw * exw;
+      const double dense = (e.x + 2 * exw + leaf) * (e.y + 2 * exw + leaf) * (e.z + 2 * exw + leaf);
+      estimated_voxels_ = std::min(shell, dense) * inv_voxel_ * inv_voxel_ * inv_voxel_;
+      max_index = std::max({e.x, e.y, e.z}) * 0.5 * inv_voxel_ + ex_vox_ + 16;
+      return estimated_voxels_ <= max_voxels_ && max_index <= double(1 << 29);
+    };
+    voxel_requested_ = voxel_;
+    // Over the budget: with fit=true (default) coarsen the voxel until the field fits, so that a
+    // default run on a big model measures a field it can hold; with fit=false refuse.
+    bool fits = size_for(voxel_);
+    for (int step = 0; !fits && fit_ && step < 200; ++step) fits = size_for(voxel_ * 1.1);
+    if (!fits) {
+      std::ostringstream m;
+      m << "openvdb: the distance field would hold about " << estimated_voxels_ << " voxels (voxel "
+        << voxel_ << ", bands " << ex_vox_ << " out / " << in_vox_ << " in voxels), over max_voxels="
+        << max_voxels_ << "; use a larger voxel, band=fixed with narrower bands, raise max_voxels, or fit=true";
+      throw InputError(m.str());
+    }
     dense_query_voxels_ = ctx.query_bounds.empty()
                               ? 0.0
                               : ctx.query_bounds.extent().x * ctx.query_bounds.extent().y *
                                     ctx.query_bounds.extent().z * inv_voxel_ * inv_voxel_ * inv_voxel_;
-    const double max_index = std::max({e.x, e.y, e.z}) * 0.5 * inv_voxel_ + ex_vox_ + 16;
-    if (estimated_voxels_ > max_voxels_ || max_index > double(1 << 29)) {
-      std::ostringstream m;
-      m << "openvdb: the distance field would hold about " << estimated_voxels_ << " voxels (voxel "
-        << voxel_ << ", bands " << ex_vox_ << " out / " << in_vox_ << " in voxels), over max_voxels="
-        << max_voxels_ << "; use a larger voxel, band=fixed with narrower bands, or raise max_voxels";
-      throw InputError(m.str());
-    }
 
     // ---- the mesh in index space; polygon i is mesh triangle i ----
     std::vector<openvdb::Vec3s> pts(mesh.vertices.size());
@@ -371,6 +387,8 @@ class OpenVdbSdf final : public Method {
   int order_, closest_steps_;
   bool keep_index_, renormalize_, remove_intersecting_;
   double max_voxels_;
+  bool fit_;
+  double voxel_requested_ = 0;
   int threads_;
 
   // the structure (grids before their accessors: accessors are destroyed first)
@@ -415,7 +433,8 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       {"renormalize", ParamType::boolean, "true", "meshToVolume renormalisation (off: DISABLE_RENORMALIZATION)", {}},
       {"isect_cleanup", ParamType::boolean, "true",
        "meshToVolume removal of self-intersection voxels (off: DISABLE_INTERSECTING_VOXEL_REMOVAL)", {}},
-      {"max_voxels", ParamType::integer, "300000000", "refuse a build whose estimated stored voxel count exceeds this", {}, 1, 1e15},
+      {"max_voxels", ParamType::integer, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
+      {"fit", ParamType::boolean, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
       {"threads", ParamType::integer, "0", "build threads; 0 = the job's --threads (a value can only lower it)", {}, 0, 1024},
   };
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };

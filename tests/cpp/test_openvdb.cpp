@@ -279,7 +279,7 @@ TEST(OpenVdb, AllDegenerateMeshDoesNotCrash) {
 TEST(OpenVdb, RefusesOverTheVoxelCap) {
   SKIP_WITHOUT_OPENVDB();
   Mesh m = icosphere(2);
-  auto v = Registry::global().create("openvdb:voxel_abs=0.001,max_voxels=1000000");
+  auto v = Registry::global().create("openvdb:voxel_abs=0.001,max_voxels=1000000,fit=false");
   std::vector<Vec3d> pts = {{-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}};
   try {
     v->build(m, context(QueryType::distance, pts));
@@ -287,6 +287,20 @@ TEST(OpenVdb, RefusesOverTheVoxelCap) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("max_voxels"), std::string::npos) << e.what();
   }
+}
+
+TEST(OpenVdb, CoarsensToFitTheVoxelCapByDefault) {
+  SKIP_WITHOUT_OPENVDB();
+  Mesh m = icosphere(2);
+  auto v = Registry::global().create("openvdb:voxel_abs=0.001,max_voxels=1000000");
+  std::vector<Vec3d> pts = {{-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}};
+  v->build(m, context(QueryType::distance, pts));
+  const auto info = v->info();
+  EXPECT_TRUE(info["voxel_coarsened_to_fit"].get<bool>());
+  EXPECT_GT(info["voxel_size"].get<double>(), 0.001);
+  EXPECT_LE(info["estimated_voxels"].get<double>(), 1e6);
+  // Still a distance field: the sphere's centre is about one radius inside.
+  EXPECT_NEAR(v->distance({0, 0, 0}).distance, -1.0, 2 * info["voxel_size"].get<double>());
 }
 
 TEST(OpenVdb, BandAutoCoversTheQueryBoxForDistance) {
