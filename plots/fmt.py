@@ -10,8 +10,11 @@ def si(x, unit="", digits=3):
         return f"0 {unit}".strip()
     prefixes = [(1e12, "T"), (1e9, "G"), (1e6, "M"), (1e3, "k"), (1, ""), (1e-3, "m"),
                 (1e-6, "µ"), (1e-9, "n")]
-    for scale, p in prefixes:
+    for i, (scale, p) in enumerate(prefixes):
         if abs(x) >= scale:
+            # 999992 is '1.00 M', not '1e+03 k': rounding may carry into the next prefix.
+            if i > 0 and abs(float(f"{x / scale:.{digits}g}")) >= 1000:
+                scale, p = prefixes[i - 1]
             return f"{x / scale:.{digits}g} {p}{unit}".strip()
     return f"{x:.{digits}g} {unit}".strip()
 
