@@ -396,6 +396,16 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
       const json& y = at(*n, path);
       if (both_ok_only && (sb != "ok" || sn != "ok")) return;  // status rows carry unresolved params
       if (x.is_null() || y.is_null() || x == y) return;
+      if (x.is_object() && y.is_object()) {  // name the parameters that differ, not all of them
+        std::set<std::string> keys;
+        for (auto& [k, v] : x.items()) keys.insert(k);
+        for (auto& [k, v] : y.items()) keys.insert(k);
+        for (auto& k : keys) {
+          const json vx = x.contains(k) ? x[k] : json(nullptr), vy = y.contains(k) ? y[k] : json(nullptr);
+          if (vx != vy) inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " + k + " " + show(vx) + " -> " + show(vy);
+        }
+        return;
+      }
       inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " +
                 (x.is_string() ? x.get<std::string>().substr(0, 16) : x.dump()) + " -> " +
                 (y.is_string() ? y.get<std::string>().substr(0, 16) : y.dump());
