@@ -16,7 +16,7 @@ APT_PACKAGES := cmake ninja-build g++ make pkg-config git \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev
 
-.PHONY: help deps build test test-cpp test-python gate bench data stability paper rebaseline report clean
+.PHONY: help deps build test test-cpp test-python gate bench data stability large paper rebaseline report clean
 
 help:
 	@echo "make bench      - install, build, make default data, run the default suite, write results/default/report/"
@@ -24,6 +24,7 @@ help:
 	@echo "make deps       - install missing Debian and Python packages (idempotent, quiet when all present)"
 	@echo "make build      - configure and build $(BVHBENCH) ($(BUILD_TYPE))"
 	@echo "make stability  - the stability suite: every method on every stress mesh"
+	@echo "make large      - every method on a closed 4M-triangle model (about 15 minutes)"
 	@echo "make paper      - the paper's tables at 30M+ triangles (about an hour)"
 	@echo "make rebaseline - regenerate the committed CI baseline (results/baseline/) on purpose"
 
@@ -76,6 +77,11 @@ stability: build
 	$(BVHBENCH) suite suites/stability.yml --out results/stability --resume
 	$(PYTHON) tools/stability_matrix.py results/stability
 	$(PYTHON) plots/report.py results/stability
+
+large: build
+	$(PYTHON) datasets-scripts/make_datasets.py --preset large
+	$(BVHBENCH) suite suites/large.yml --out results/large --resume
+	$(PYTHON) plots/report.py results/large
 
 PAPER_MODELS := bunny_closed_32m scan_like_32m
 
