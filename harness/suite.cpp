@@ -611,6 +611,11 @@ void add_suite_command(CLI::App& app) {
 
     std::vector<json> done;
     std::size_t finished = 0, skipped = 0;
+    // Jobs this invocation will actually run (for the time-left estimate): --resume skips the rest.
+    std::size_t to_run = jobs.size();
+    if (o->resume)
+      for (auto& j : jobs)
+        if (fs::exists(runs / (j.id + ".json")) || fs::exists(runs / (j.id + ".json.child"))) --to_run;
     double spent = 0;
     auto t_start = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < jobs.size() && !g_interrupted; ++i) {
@@ -682,7 +687,7 @@ void add_suite_command(CLI::App& app) {
       write_summary_csv((out / "summary.csv").string(), done);
       ++finished;
       spent += std::chrono::duration<double>(std::chrono::steady_clock::now() - tj).count();
-      double left = spent / double(finished) * double(jobs.size() - i - 1);
+      double left = spent / double(finished) * double(to_run > finished ? to_run - finished : 0);
       std::cerr << "[" << (i + 1) << "/" << jobs.size() << "] " << j.id << ": " << short_result(result)
                 << "  (elapsed " << format_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count())
                 << ", left ~" << format_seconds(left) << ")\n";
