@@ -799,6 +799,29 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
     }
   }
   for (const Leaf& lf : T.leaves) S.max_refs_per_leaf = std::max<std::size_t>(S.max_refs_per_leaf, lf.tri_count);
+  // ---- closedness (by vertex index): every undirected edge is used as often in each direction.
+  // Then the winding number is a function of the point, so a coherent query may count crossings
+  // from the previous point instead of the leaf's reference (same integer, exactly).
+  if (vin.size() < (std::size_t(1) << 31)) {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(3 * nt);
+    for (const auto& t : tin)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t u = t[k], v = t[(k + 1) % 3];
+        if (u == v) continue;
+        keys.push_back(u < v ? (u << 33 | v << 1 | 0u) : (v << 33 | u << 1 | 1u));
+      }
+    std::sort(keys.begin(), keys.end());
+    bool closed = true;
+    for (std::size_t i = 0; i < keys.size() && closed;) {
+      std::size_t j = i;
+      long bal = 0;
+      while (j < keys.size() && (keys[j] >> 1) == (keys[i] >> 1)) bal += (keys[j++] & 1u) ? -1 : 1;
+      closed = bal == 0;
+      i = j;
+    }
+    T.closed = closed;
+  }
   S.build_seconds = since(t_start);
   report(1.0);
   return T;

@@ -123,6 +123,9 @@ class Octree {
   double root_size = 0;  ///< edge of the root cube
   int leaf_level = 0;
   std::uint32_t num_triangles = 0;  ///< in the input mesh
+  /// Every undirected edge (by vertex index) is used equally often in both directions: the winding
+  /// number is then path-independent, which coherent inside queries rely on (false: they don't).
+  bool closed = false;
   std::vector<Node> nodes;
   std::vector<std::uint32_t> children;
   std::vector<Plane> planes;
@@ -165,11 +168,20 @@ class Query {
 
  private:
   std::uint32_t locate(const Vec3d& p, bool* outside_root);
-  bool classify_leaf(const Vec3d& p, const Leaf& leaf);
+  bool classify_leaf(const Vec3d& p, const Leaf& leaf, std::uint32_t leaf_index);
   const Octree& t_;
   bool coherent_;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t query_id_ = 0;
+  // coherent inside (closed meshes): the previous point of the path, its leaf, its exact winding
+  // number and its exact side of every triangle of that leaf (all non-zero when prev_ok_).
+  bool prev_ok_ = false;
+  std::uint32_t prev_leaf_ = UINT32_MAX;
+  Vec3d prev_p_;
+  int prev_w_ = 0;
+  std::vector<std::int8_t> prev_side_;
+  std::vector<double> prev_margin_;  // see classify_leaf
+  double prev_L_ = 0;
   // coherent state
   std::uint32_t last_node_ = UINT32_MAX;
   std::uint32_t last_cell_[3] = {0, 0, 0};

@@ -15,11 +15,20 @@ inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f
 }  // namespace
 
 Query::Query(const Octree& tree, bool coherent)
-    : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0) {}
+    : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0) {
+  if (coherent_ && t_.closed) {
+    std::uint32_t m = 0;
+    for (const Leaf& lf : t_.leaves) m = std::max(m, lf.tri_count);
+    prev_side_.assign(m, 0);
+    prev_margin_.assign(m, 0.0);
+  }
+}
 
 void Query::reset_path() {
   last_node_ = UINT32_MAX;
   last_tri_ = UINT32_MAX;
+  prev_ok_ = false;
+  prev_leaf_ = UINT32_MAX;
 }
 
 std::uint32_t Query::locate(const Vec3d& p, bool* outside_root) {
@@ -82,7 +91,7 @@ bool Query::inside(const Vec3d& p) {
     case LeafConfig::concave: ++counters.hit_concave; break;
     default: ++counters.hit_special; break;
   }
-  return classify_leaf(p, t_.leaves[nd.index]);
+  return classify_leaf(p, t_.leaves[nd.index], nd.index);
 }
 
 namespace {
@@ -90,13 +99,20 @@ namespace {
 /// Winding-number change w(p) - w(q) along q -> p over the leaf's triangles. `q_side(k)` gives
 /// the exact side (+1 / -1, never 0) of q for triangle k. The float planes filter p's side; ties
 /// go to the exact predicate. Returns false when p is on a triangle (*on_surface) or the segment
-/// is degenerate (through an edge or a vertex).
+/// is degenerate (through an edge or a vertex). If `p_side` is given, p's exact side of every
+/// non-degenerate triangle is written there (valid only when true is returned; *p_zero is set if
+/// one of them is 0). p_side[k] may be the storage q_side(k) reads: each k is read before written.
 template <class QSide>
 bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
-                  QSide&& q_side, QueryCounters& cnt, int* delta, bool* on_surface) {
+                  QSide&& q_side, QueryCounters& cnt, int* delta, bool* on_surface,
+                  std::int8_t* p_side = nullptr, bool* p_zero = nullptr, double* p_margin = nullptr) {
   const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
               pz = float(p.z - double(lf.centre[2]));
   const float eps = lf.eps;
+  // The segment's bounding box: a triangle whose box misses it cannot be crossed (exact
+  // comparisons of exact values, so this filter never changes an answer).
+  const double sx0 = std::min(p.x, q.x), sx1 = std::max(p.x, q.x), sy0 = std::min(p.y, q.y),
+               sy1 = std::max(p.y, q.y), sz0 = std::min(p.z, q.z), sz1 = std::max(p.z, q.z);
   int w = 0;
   cnt.planes_tested += n;
   for (std::uint32_t k = 0; k < n; ++k) {
@@ -107,9 +123,20 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
     int sp;
     if (s > eps) sp = 1;
     else if (s < -eps) sp = -1;
-    else sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+    else {
+      sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+      if (sp == 0 && p_zero) *p_zero = true;
+    }
+    if (p_side) {
+      p_side[k] = std::int8_t(sp);
+      p_margin[k] = double(std::fabs(s)) - 2.0 * double(eps);  // <= p's true distance to the plane
+    }
     if (sp == sq) continue;
     ++cnt.triangles_tested;
+    if (double(std::max({t.a[0], t.b[0], t.c[0]})) < sx0 || double(std::min({t.a[0], t.b[0], t.c[0]})) > sx1 ||
+        double(std::max({t.a[1], t.b[1], t.c[1]})) < sy0 || double(std::min({t.a[1], t.b[1], t.c[1]})) > sy1 ||
+        double(std::max({t.a[2], t.b[2], t.c[2]})) < sz0 || double(std::min({t.a[2], t.b[2], t.c[2]})) > sz1)
+      continue;
     switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
       case Cross::none: break;
       case Cross::proper: w += sq > 0 ? 1 : -1; break;  // q outer -> p inner: entering
@@ -123,16 +150,80 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
 
 }  // namespace
 
-bool Query::classify_leaf(const Vec3d& p, const Leaf& lf) {
+bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li) {
   const LeafTri* blk = t_.tris.data() + lf.tri_begin;
   const std::uint32_t n = lf.tri_count;
   const Vec3d ref = to_d(lf.ref);
   bool on_surface = false;
   int delta;
+  // Coherent path on a closed mesh: count the crossings on the short segment from the previous
+  // point (same leaf, so the same triangles are all that can cross it) instead of the long one
+  // from the reference. The winding number is a function of the point, so the integer is the same.
+  std::int8_t* side = prev_side_.data();
+  const bool track = coherent_ && t_.closed;
+  if (track && prev_ok_ && prev_leaf_ == li) {
+    if (p == prev_p_) return prev_w_ >= 1;
+    // margin[k] - L bounds from below the distance of the previous point to triangle k's plane
+    // (true signed distance: 1-Lipschitz), L the path length since margin[k] was set (rounded
+    // up); while it exceeds the step, the side cannot have changed and the plane is not even
+    // evaluated. The others get their side at p (float filter, exact on ties) and, if it changed,
+    // the exact crossing test on the segment prev -> p.
+    const Vec3d dp = p - prev_p_;
+    const double L = prev_L_ + std::sqrt(dot(dp, dp)) * (1.0 + 1e-9);
+    double* margin = prev_margin_.data();
+    prev_ok_ = false;  // until the pass completes
+    if (L < 1e3 * t_.cell_size(t_.leaf_level)) {
+      const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+                  pz = float(p.z - double(lf.centre[2]));
+      const float eps = lf.eps;
+      int w = prev_w_;
+      bool zero = false, fail = false;
+      for (std::uint32_t k = 0; k < n; ++k) {
+        const LeafTri& t = blk[k];
+        if (margin[k] > L || (t.flags & kDegenerate)) continue;
+        ++counters.planes_tested;
+        const float sf = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+        int sp;
+        if (sf > eps) sp = 1;
+        else if (sf < -eps) sp = -1;
+        else {
+          sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+          if (sp == 0) zero = true;
+        }
+        margin[k] = double(std::fabs(sf)) - 2.0 * double(eps) + L;
+        const int sq = side[k];
+        side[k] = std::int8_t(sp);
+        if (sp == sq) continue;
+        ++counters.triangles_tested;
+        const Cross c = segment_triangle(p, prev_p_, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c));
+        if (c == Cross::proper) w += sq > 0 ? 1 : -1;
+        else if (c == Cross::on_p) return true;  // on the boundary; prev_ok_ stays false
+        else if (c == Cross::degenerate) { fail = true; break; }
+      }
+      if (!fail) {
+        prev_ok_ = !zero;
+        prev_p_ = p;
+        prev_w_ = w;
+        prev_L_ = L;
+        return w >= 1;
+      }
+    }
+  }
+  if (track) prev_ok_ = false;
   if (lf.ref_valid) {
+    bool zero = false;
     if (leaf_winding(p, ref, blk, n, lf, [&](std::uint32_t k) { return (blk[k].flags & kRefPositive) ? 1 : -1; },
-                     counters, &delta, &on_surface))
-      return lf.ref_winding + delta >= 1;
+                     counters, &delta, &on_surface, track ? side : nullptr, &zero, prev_margin_.data())) {
+      const int w = lf.ref_winding + delta;
+      if (track) {
+        prev_L_ = 0;
+        prev_ok_ = !zero;
+        prev_leaf_ = li;
+        prev_p_ = p;
+        prev_w_ = w;
+      }
+      return w >= 1;
+    }
     if (on_surface) return true;  // on the boundary: the solid is closed
   }
   // Rare: ref -> p passes through an edge or a vertex. Route through another point r2 of the
