@@ -178,8 +178,17 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
       cnt.planes_tested += lf.tri_count;
       for (std::uint32_t k = lf.tri_begin, end = lf.tri_begin + lf.tri_count; k < end; ++k) {
         const LeafTri& tr = tris[k];
+        // Two cheap lower bounds of the triangle's distance: its face plane, its bounding box
+        // (as Query::unsigned_distance does).
         const float s = tr.n[0] * px + tr.n[1] * py + tr.n[2] * pz - tr.d;
         if (double(std::fabs(s)) - eps > bst.best) continue;
+        double bd2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double lo = double(std::min({tr.a[a], tr.b[a], tr.c[a]})), hi = double(std::max({tr.a[a], tr.b[a], tr.c[a]}));
+          const double v = std::max({lo - p[a], 0.0, p[a] - hi});
+          bd2 += v * v;
+        }
+        if (bd2 * (1.0 - 1e-12) > bst.best2) continue;
         test_tri(k);
       }
       continue;
