@@ -176,7 +176,7 @@ void add_build_command(CLI::App& ebp_cmd) {
     std::vector<std::string> params;
     double budget_mb = 0;
     int threads = 2;
-    int page_kb = 64;
+    int page_kb = 16;
     bool json = false;
     int fail_after_pages = -1;  // test hook
   };
