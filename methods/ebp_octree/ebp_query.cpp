@@ -320,6 +320,7 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
       d2 += v * v;
     }
     double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    if (b > best) return b;  // pruned by the box alone: the planes could only raise the bound
     float m = -std::numeric_limits<float>::infinity();
     const Plane* pl = planes + nd.plane_begin;
     for (std::uint32_t k = 0; k < nd.plane_count; ++k)
@@ -344,18 +345,22 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
       counters.planes_tested += lf.tri_count;
       for (std::uint32_t k = lf.tri_begin, e = lf.tri_begin + lf.tri_count; k < e; ++k) {
         const LeafTri& t = tris[k];
-        // Two cheap lower bounds of the triangle's distance: its face plane (tight when p is
-        // over the face), its bounding box (tight when p is far from a flat patch, where every
-        // face plane is at about the same distance).
-        const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
-        if (double(std::fabs(s)) - eps > best) continue;
+        // Two cheap lower bounds of the triangle's distance: its bounding box (tight when p is
+        // far from a flat patch, where every face plane is at about the same distance), one axis
+        // at a time with an early exit (one axis alone rejects most triangles once the bound is
+        // tight), and its face plane (tight when p is over the face). Each partial test is
+        // weaker than the full one below it, so the triangles tested are exactly the same.
         double bd2 = 0;
+        bool far = false;
         for (int a = 0; a < 3; ++a) {
           const double lo = double(std::min({t.a[a], t.b[a], t.c[a]})), hi = double(std::max({t.a[a], t.b[a], t.c[a]}));
           const double v = std::max({lo - p[a], 0.0, p[a] - hi});
           bd2 += v * v;
+          if (bd2 * (1.0 - 1e-12) > best2) { far = true; break; }
         }
-        if (bd2 * (1.0 - 1e-12) > best2) continue;
+        if (far) continue;
+        const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+        if (double(std::fabs(s)) - eps > best) continue;
         test_tri(k);
       }
       continue;

@@ -571,5 +571,5 @@ TEST(EbpQuery, CountersAreDeterministic) {
            std::to_string(c.exact_fallbacks);
   };
   EXPECT_EQ(str(in), "1419, 48350, 16764, 114, 0, 0, 0, 286, 0") << "inside counters";
-  EXPECT_EQ(str(di), "4200, 251588, 26244, 114, 0, 0, 0, 286, 0") << "distance counters";
+  EXPECT_EQ(str(di), "4200, 242876, 26244, 114, 0, 0, 0, 286, 0") << "distance counters";
 }
