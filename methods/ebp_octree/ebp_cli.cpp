@@ -141,7 +141,9 @@ struct SignalGuard {
     sigaction(SIGTERM, &old_term, nullptr);
   }
   static void check() {
-    if (g_signal) throw std::runtime_error(std::string("interrupted by ") + (g_signal == SIGINT ? "SIGINT" : "SIGTERM"));
+    if (g_signal)
+      throw std::runtime_error(std::string("interrupted by ") + (g_signal == SIGINT ? "SIGINT" : "SIGTERM") +
+                               "; nothing written, temporary files removed");
   }
 };
 
@@ -268,6 +270,7 @@ void add_build_command(CLI::App& ebp_cmd) {
     try {
       ebp::write_store_atomic(tree, out.string(), wo);
     } catch (const std::exception& e) {
+      if (g_signal) throw;
       throw std::runtime_error(std::string(e.what()) + "; nothing written (no " + o->out + ", temporary files removed)");
     }
     wprog.finish();
