@@ -330,6 +330,7 @@ void add_info_command(CLI::App& ebp_cmd) {
     j["leaf_level"] = h.leaf_level;
     j["levels"] = h.leaf_level + 1;
     j["triangles"] = h.num_triangles;
+    j["closed"] = (h.flags & ebp::kStoreClosed) != 0;
     j["params"] = {{"leaf_factor", h.leaf_factor}, {"max_planes", h.max_planes}, {"cluster_angle", h.cluster_angle}};
     j["nodes"] = {{"total", h.nodes}, {"grey_inner", h.inner}, {"grey_leaves", h.leaves},
                   {"white", h.white}, {"black", h.black}};
@@ -353,7 +354,8 @@ void add_info_command(CLI::App& ebp_cmd) {
       return;
     }
     std::printf("EBP-Octree store %s (version %u, %.1f MiB)\n", o->path.c_str(), h.version, double(h.file_size) / 1048576.0);
-    std::printf("  mesh              %s (%u triangles)\n", info.value("mesh", std::string("?")).c_str(), h.num_triangles);
+    std::printf("  mesh              %s (%u triangles, %s)\n", info.value("mesh", std::string("?")).c_str(), h.num_triangles,
+                (h.flags & ebp::kStoreClosed) ? "closed" : "not known to be closed");
     std::printf("  root cube         lo (%.9g, %.9g, %.9g), size %.9g\n", h.root_lo[0], h.root_lo[1], h.root_lo[2], h.root_size);
     std::printf("  levels            %u (leaf level %u)\n", h.leaf_level + 1, h.leaf_level);
     std::printf("  parameters        leaf_factor=%g max_planes=%d cluster_angle=%g\n", h.leaf_factor, h.max_planes, h.cluster_angle);

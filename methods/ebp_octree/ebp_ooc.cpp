@@ -159,7 +159,28 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
   };
   TopItem stack[8 * (kMaxLevel + 2)];
   int sp = 0;
-  stack[sp++] = {t.root_lo, lower_bound(nodes[0], t.root_lo, t.root_size), 0u, 0};
+  if (e.page->chain == 0) {
+    stack[sp++] = {t.root_lo, lower_bound(nodes[0], t.root_lo, t.root_size), 0u, 0};
+  } else {  // start at the page's roots (children of the last chain node), nearest popped first
+    const std::uint32_t last = e.page->chain - 2;  // the parent; chain - 1 is the white dummy
+    const int cl = int(last) + 1;
+    const double csz = t.cell_size(cl);
+    for (std::uint32_t o = 0; o < 8; ++o) {
+      const std::uint32_t ci = t.children[nodes[last].index + o];
+      const Node& cn = nodes[ci];
+      if (cn.kind != NodeKind::inner && cn.kind != NodeKind::leaf) continue;
+      std::uint32_t x, y, z;
+      octcode_cell(cn.code, &x, &y, &z);
+      const Vec3d lo{t.root_lo.x + double(x) * csz, t.root_lo.y + double(y) * csz, t.root_lo.z + double(z) * csz};
+      const double b = lower_bound(cn, lo, csz);
+      if (b > bst.best) continue;
+      TopItem x1{lo, b, ci, cl};
+      int a = sp - 1;
+      while (a >= 0 && stack[a].bound < x1.bound) { stack[a + 1] = stack[a]; --a; }
+      stack[a + 1] = x1;
+      ++sp;
+    }
+  }
   while (sp > 0) {
     const TopItem it = stack[--sp];
     if (it.bound > bst.best) continue;

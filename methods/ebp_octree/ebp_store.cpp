@@ -79,6 +79,16 @@ std::uint32_t crc32c(const void* data, std::size_t n, std::uint32_t crc) {
 // Writer
 namespace {
 
+// Octree::closed is being added to the in-memory structure; read and set it only if it exists.
+template <class T>
+auto tree_closed(const T& t, int) -> decltype(bool(t.closed)) { return t.closed; }
+template <class T>
+bool tree_closed(const T&, long) { return false; }
+template <class T>
+auto set_tree_closed(T& t, bool v, int) -> decltype(void(t.closed = v)) { t.closed = v; }
+template <class T>
+void set_tree_closed(T&, bool, long) {}
+
 std::uint64_t align_up(std::uint64_t v, std::uint64_t a) { return (v + a - 1) / a * a; }
 
 struct Fd {
@@ -306,6 +316,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
   h.cluster_angle = opt.params.cluster_angle;
   h.max_planes = opt.params.max_planes;
   h.page_target = std::uint32_t(std::max<std::size_t>(opt.page_target, 4096));
+  h.flags = tree_closed(t, 0) ? kStoreClosed : 0;
   h.nodes = t.nodes.size();
   h.leaves = t.leaves.size();
   for (const Node& nd : t.nodes) {
@@ -471,6 +482,7 @@ void StoreReader::open_and_check() {
         std::isfinite(h_.root_size) && h_.root_size > 0))
     fail("bad bounding cube");
   if (h_.num_triangles == 0) fail("no triangles");
+  if (h_.flags & ~kStoreClosed) fail("unknown header flags");
   if (h_.num_pages == 0 || h_.num_pages > 0xffffffffull) fail("bad page count " + std::to_string(h_.num_pages));
   struct Named { const char* name; const Section* s; std::uint64_t expect; };
   const Named secs[] = {
@@ -708,6 +720,8 @@ std::unique_ptr<Page> StoreReader::load_page(std::uint32_t id, std::uint64_t* by
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
   T.leaf_level = L;
   T.num_triangles = ph.nlocal;
+  set_tree_closed(T, (h_.flags & kStoreClosed) != 0, 0);
+  page->chain = chain;
   return page;
 }
 
@@ -718,6 +732,7 @@ Octree StoreReader::load_all() const {
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
   T.leaf_level = int(h_.leaf_level);
   T.num_triangles = h_.num_triangles;
+  set_tree_closed(T, (h_.flags & kStoreClosed) != 0, 0);
   std::map<std::uint32_t, std::unique_ptr<Page>> pages;
   // Copies node i of page pg's tree (page-local indexing) into T, pre-order.
   std::function<std::uint32_t(const Page&, std::uint32_t)> copy_page = [&](const Page& pg, std::uint32_t i) {

@@ -36,6 +36,9 @@ inline constexpr std::uint32_t kStoreVersion = 1;
 inline constexpr std::uint32_t kPageMagic = 0x47504245u;  // "EBPG"
 inline constexpr std::uint64_t kPageAlign = 4096;
 inline constexpr std::uint64_t kMaxPageBytes = std::uint64_t(1) << 30;  ///< reader's limit per page
+/// FileHeader::flags: the tree's Octree::closed (when the in-memory structure has that field):
+/// every page tree gets it, so that coherent inside queries may use path independence.
+inline constexpr std::uint64_t kStoreClosed = 1;
 
 /// CRC-32C (Castagnoli), hardware (SSE 4.2) when the CPU has it.
 std::uint32_t crc32c(const void* data, std::size_t n, std::uint32_t crc = 0);
@@ -61,7 +64,8 @@ struct FileHeader {
   std::uint64_t num_pages, num_top_nodes, num_top_children, num_top_planes;
   std::uint64_t file_size;
   Section top_nodes, top_children, top_planes, info, pages, directory;
-  std::uint8_t reserved[512 - 8 - 4 - 4 - 32 - 8 - 16 - 8 - 56 - 32 - 8 - 6 * 24 - 8];
+  std::uint64_t flags;  ///< kStoreClosed (zero in files written before it existed)
+  std::uint8_t reserved[512 - 8 - 4 - 4 - 32 - 8 - 16 - 8 - 56 - 32 - 8 - 6 * 24 - 8 - 8];
   std::uint32_t header_crc;  ///< CRC-32C of the header with this field zero
   std::uint32_t pad;
 };
@@ -124,6 +128,7 @@ void write_store_atomic(const Octree& tree, const std::string& path, const Store
 /// from its local triangle indices to the input mesh's.
 struct Page {
   std::uint32_t id = 0;
+  std::uint32_t chain = 0;  ///< nodes[0, chain - 1) are the root-to-parent chain, nodes[chain - 1] the dummy (0: root page)
   Octree tree;
   std::vector<std::uint32_t> global_tri;
   std::size_t bytes() const { return tree.bytes() + global_tri.capacity() * sizeof(std::uint32_t); }
