@@ -57,6 +57,16 @@ json job_block(const JobSpec& spec) {
   j["method_spec"] = spec.method_spec;
   j["params"] = given;
   j["params_key"] = "";
+  // Resolve the parameters when the method is known, so that status rows written without running
+  // the job (a crash, a query set that could not be made) pair and group like the job's own rows.
+  if (const MethodInfo* info = Registry::global().find(name)) {
+    try {
+      Params p = Params::resolve(name, info->params, given);
+      j["params"] = p.values();
+      j["params_key"] = p.non_default_string();
+    } catch (const std::exception&) {
+    }
+  }
   j["query"] = to_string(spec.query_type);
   j["mesh"] = {{"path", spec.mesh_path}};
   j["queries"] = {{"path", spec.queries_path}};
