@@ -611,6 +611,21 @@ void add_suite_command(CLI::App& app) {
 
     std::vector<json> done;
     std::size_t finished = 0, skipped = 0;
+    // summary.csv covers every job of the suite that has a result in this folder, in suite order,
+    // not only the ones this invocation ran (--filter, --resume).
+    std::map<std::string, json> summary_rows;
+    for (auto& j : cfg.jobs) {
+      json r;
+      if (read_json((runs / (j.id + ".json")).string(), &r)) summary_rows[j.id] = r;
+    }
+    auto write_summary = [&] {
+      std::vector<json> rows;
+      for (auto& j : cfg.jobs) {
+        auto it = summary_rows.find(j.id);
+        if (it != summary_rows.end()) rows.push_back(it->second);
+      }
+      write_summary_csv((out / "summary.csv").string(), rows);
+    };
     // Jobs this invocation will actually run (for the time-left estimate): --resume skips the rest.
     std::size_t to_run = jobs.size();
     if (o->resume)
@@ -635,6 +650,7 @@ void add_suite_command(CLI::App& app) {
         existing["job"]["suite"] = cfg.name;
         write_json_atomic(result_path, existing);
         std::remove(child_path.c_str());
+        summary_rows[j.id] = existing;
         done.push_back(existing);
         ++skipped;
         continue;
@@ -684,7 +700,8 @@ void add_suite_command(CLI::App& app) {
       write_json_atomic(result_path, result);
       std::remove(child_path.c_str());
       done.push_back(result);
-      write_summary_csv((out / "summary.csv").string(), done);
+      summary_rows[j.id] = result;
+      write_summary();
       ++finished;
       spent += std::chrono::duration<double>(std::chrono::steady_clock::now() - tj).count();
       double left = spent / double(finished) * double(to_run > finished ? to_run - finished : 0);
@@ -692,7 +709,7 @@ void add_suite_command(CLI::App& app) {
                 << "  (elapsed " << format_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count())
                 << ", left ~" << format_seconds(left) << ")\n";
     }
-    write_summary_csv((out / "summary.csv").string(), done);
+    write_summary();
     if (g_interrupted) {
       std::cerr << "suite: interrupted; " << done.size() << " job(s) kept. Run again with --resume to finish.\n";
       throw ExitCode{130};
