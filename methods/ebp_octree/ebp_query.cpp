@@ -341,7 +341,11 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
       const Leaf& lf = t_.leaves[nd.index];
       const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
                   pz = float(p.z - double(lf.centre[2]));
-      const double eps = double(lf.eps);
+      // lf.eps bounds the float error of a face-plane value for points near the leaf; the error
+      // grows with p's distance from the leaf centre (the rounding of px, py, pz and of the
+      // products), so far points get the extra term, or they could lose their closest triangle.
+      const double eps_p = double(lf.eps) +
+                           1e-6 * (double(std::fabs(px)) + double(std::fabs(py)) + double(std::fabs(pz)));
       counters.planes_tested += lf.tri_count;
       for (std::uint32_t k = lf.tri_begin, e = lf.tri_begin + lf.tri_count; k < e; ++k) {
         const LeafTri& t = tris[k];
@@ -360,7 +364,7 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
         }
         if (far) continue;
         const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
-        if (double(std::fabs(s)) - eps > best) continue;
+        if (double(std::fabs(s)) - eps_p > best) continue;
         test_tri(k);
       }
       continue;
