@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "ebp_adapter.hpp"
 #include "commands.hpp"
 #include "ebp_ooc.hpp"
 #include "ebp_store.hpp"
@@ -69,15 +70,7 @@ class EbpOocMethod final : public Method {
   }
   bool supports(QueryType) const override { return true; }
   bool inside(const Vec3d& p) override { return ooc_->inside(p); }
-  DistanceResult distance(const Vec3d& p) override {
-    const ebp::DistanceAnswer a = ooc_->distance(p);
-    DistanceResult r;
-    r.distance = a.distance;
-    r.closest = a.closest;
-    r.normal = a.normal;
-    r.triangle = a.triangle;
-    return r;
-  }
+  DistanceResult distance(const Vec3d& p) override { return to_distance_result(ooc_->distance(p)); }
   void reset_path() override {
     if (ooc_) ooc_->reset_path();
   }

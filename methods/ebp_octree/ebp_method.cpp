@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "ebp_adapter.hpp"
 #include "ebp_octree.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
@@ -113,15 +114,7 @@ class EbpOctreeMethod final : public Method {
   }
   bool supports(QueryType) const override { return true; }
   bool inside(const Vec3d& p) override { return query_->inside(p); }
-  DistanceResult distance(const Vec3d& p) override {
-    const ebp::DistanceAnswer a = query_->distance(p);
-    DistanceResult r;
-    r.distance = a.distance;
-    r.closest = a.closest;
-    r.normal = a.normal;
-    r.triangle = a.triangle;
-    return r;
-  }
+  DistanceResult distance(const Vec3d& p) override { return to_distance_result(query_->distance(p)); }
   void reset_path() override {
     if (query_) query_->reset_path();
   }
