@@ -2,10 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
+#include <unistd.h>
 
 #include "commands.hpp"
 #include "errors.hpp"
@@ -199,10 +201,24 @@ void add_queries_command(CLI::App& app) {
     }
     if (o->out.size() < 4 || o->out.compare(o->out.size() - 4, 4, ".npy") != 0)
       throw InputError("--out " + o->out + ": must end in .npy");
+    // The output folder is checked before the (possibly long) generation: a missing or
+    // unwritable folder is bad usage (exit 2), not a failure found minutes later.
+    const std::filesystem::path dir = std::filesystem::path(o->out).parent_path().empty()
+                                          ? std::filesystem::path(".")
+                                          : std::filesystem::path(o->out).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+      throw InputError("--out " + o->out + ": folder " + dir.string() + " does not exist");
+    if (::access(dir.c_str(), W_OK) != 0)
+      throw InputError("--out " + o->out + ": folder " + dir.string() + " is not writable");
     Mesh mesh = load_mesh(o->mesh);
     nlohmann::json meta;
     auto pts = generate_queries(mesh, o->kind, o->n, o->seed, given, &meta);
-    write_query_set(o->out, pts, meta);
+    try {
+      write_query_set(o->out, pts, meta);
+    } catch (const std::runtime_error& e) {
+      throw InputError(e.what());  // names the file and the reason (e.g. no space left)
+    }
   });
 }
 

@@ -115,6 +115,10 @@ def test_bad_arguments_exit_2(bvhbench, shared_meshes, cow_queries, tmp_path):
     _expect_exit_2(run(bvhbench, "queries", "--mesh", cow, "--n", 5, "--param", "zzz=1", "--out", tmp_path / "q.npy"),
                    "zzz")
     _expect_exit_2(run(bvhbench, "suite", tmp_path / "missing.yml", "--out", tmp_path / "o"), "missing.yml")
+    # an output folder that does not exist: exit 2, named, and nothing generated
+    _expect_exit_2(run(bvhbench, "queries", "--mesh", cow, "--n", 5, "--out", tmp_path / "nodir" / "q.npy"),
+                   "nodir")
+    assert not (tmp_path / "nodir").exists()
 
 
 def test_bad_input_files_exit_2(bvhbench, shared_meshes, cow_queries, tmp_path):
