@@ -421,15 +421,37 @@ void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std:
   nd.plane_count = std::uint16_t(tm.planes.size());
 
   // Configuration, on the exact face planes and the triangles' vertices.
+  // The distinct vertices (a small hash set on the float bits; the classification below does not
+  // depend on their order, only on which exist).
   const LeafTri* blk = out;
   std::vector<Vec3d> verts;
-  for (std::uint32_t k = 0; k < lf.tri_count; ++k)
-    if (!(blk[k].flags & kDegenerate))
-      for (const float* f : {blk[k].a, blk[k].b, blk[k].c}) verts.push_back(to_d(f));
-  std::sort(verts.begin(), verts.end(), [](const Vec3d& x, const Vec3d& y) {
-    return x.x < y.x || (x.x == y.x && (x.y < y.y || (x.y == y.y && x.z < y.z)));
-  });
-  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  {
+    std::size_t cap = 16;
+    while (cap < 6 * std::size_t(lf.tri_count)) cap <<= 1;
+    struct Key { std::uint32_t x, y, z, used; };
+    std::vector<Key> set(cap, Key{0, 0, 0, 0});
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+      if (blk[k].flags & kDegenerate) continue;
+      for (const float* f : {blk[k].a, blk[k].b, blk[k].c}) {
+        Key key{0, 0, 0, 1};
+        std::memcpy(&key.x, &f[0], 4);
+        std::memcpy(&key.y, &f[1], 4);
+        std::memcpy(&key.z, &f[2], 4);
+        std::uint64_t h = (std::uint64_t(key.x) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(key.y) * 0xC2B2AE3D27D4EB4Full) ^
+                          (std::uint64_t(key.z) * 0x165667B19E3779F9ull);
+        h ^= h >> 29;
+        for (std::size_t i = std::size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+          Key& e = set[i];
+          if (!e.used) {
+            e = key;
+            verts.push_back(to_d(f));
+            break;
+          }
+          if (e.x == key.x && e.y == key.y && e.z == key.z) break;
+        }
+      }
+    }
+  }
   bool convex = !verts.empty(), concave = !verts.empty();
   for (std::uint32_t k = 0; k < lf.tri_count && (convex || concave); ++k) {
     if (blk[k].flags & kDegenerate) continue;
@@ -482,14 +504,37 @@ void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std:
   // Colouring half-edges: reference point -> portal of each face, over this leaf's triangles
   // only (the segment lies in the closed cell, and every triangle meeting the closed cell is in
   // the block: the distribution is conservative).
+  // This is segment_winding(ref, portal) with the reference's exact sides already known (every
+  // non-degenerate plane, nonzero) and the portal's side filtered by the leaf's float planes
+  // (|s| > eps decides, as in the queries; otherwise orient3d): the same result, cheaper.
   for (int dir = 0; dir < 6; ++dir) halves->h[dir] = kDegenerateHalf;
   if (lf.ref_valid) {
     std::uint32_t x, y, z;
     octcode_cell(code, &x, &y, &z);
     const Vec3d ra = to_d(lf.ref);
+    const float eps = lf.eps;
     for (int dir = 0; dir < 6; ++dir) {
-      int delta;
-      if (segment_winding(ra, face_portal(ctx.f, x, y, z, dir), out, n, &delta)) halves->h[dir] = delta;
+      const Vec3d q = face_portal(ctx.f, x, y, z, dir);
+      const float qx = float(q.x - double(lf.centre[0])), qy = float(q.y - double(lf.centre[1])),
+                  qz = float(q.z - double(lf.centre[2]));
+      int w = 0;
+      bool ok = true;
+      for (std::size_t k = 0; k < n && ok; ++k) {
+        const LeafTri& t = out[k];
+        if (t.flags & kDegenerate) continue;
+        const int sp = (t.flags & kRefPositive) ? 1 : -1;
+        const float s = t.n[0] * qx + t.n[1] * qy + t.n[2] * qz - t.d;
+        int sq;
+        if (s > eps) sq = 1;
+        else if (s < -eps) sq = -1;
+        else sq = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), q);
+        if (sq == sp) continue;
+        const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
+        const Cross r = sq != 0 ? segment_triangle(ra, q, sp, sq, a, b, c) : segment_triangle(q, ra, sq, sp, a, b, c);
+        if (r == Cross::degenerate || r == Cross::on_p) ok = false;
+        else if (r == Cross::proper) w += sp;
+      }
+      if (ok) halves->h[dir] = w;
     }
   }
 }

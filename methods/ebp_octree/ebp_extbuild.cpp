@@ -16,7 +16,11 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
 #include <queue>
+#include <thread>
 #include <sstream>
 #include <stdexcept>
 
@@ -222,6 +226,7 @@ class PlySource final : public TriangleSource {
         }
     }
     face_off_ = off;
+    ntri_ = lay.nf;  // an estimate (exact for triangle faces) until the first scan counts them
   }
   ~PlySource() override {
     if (fd_ >= 0) ::close(fd_);
@@ -885,6 +890,83 @@ std::uint64_t mix64(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
+/// src.scan() in a producer thread (parsing the file), the chunks handed to `fn` in this thread
+/// through a queue of at most 3 chunks: parsing overlaps the work on the previous chunk.
+void prefetch_scan(TriangleSource& src, const TriangleSource::Chunk& fn) {
+  struct Buf {
+    std::uint64_t first = 0;
+    std::size_t n = 0;
+    std::vector<std::uint32_t> idx;
+    std::vector<float> xyz;
+  };
+  struct Abort {};
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<Buf> q;
+  std::vector<Buf> spare;
+  bool done = false, stop = false;
+  std::exception_ptr err;
+  std::thread prod([&] {
+    try {
+      src.scan([&](std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz) {
+        Buf b;
+        {
+          std::unique_lock<std::mutex> lk(mu);
+          cv.wait(lk, [&] { return q.size() < 3 || stop; });
+          if (stop) throw Abort{};
+          if (!spare.empty()) {
+            b = std::move(spare.back());
+            spare.pop_back();
+          }
+        }
+        b.first = first;
+        b.n = n;
+        b.idx.assign(idx, idx + 3 * n);
+        b.xyz.assign(xyz, xyz + 9 * n);
+        {
+          std::lock_guard<std::mutex> lk(mu);
+          q.push_back(std::move(b));
+        }
+        cv.notify_all();
+      });
+    } catch (const Abort&) {
+    } catch (...) {
+      err = std::current_exception();
+    }
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      done = true;
+    }
+    cv.notify_all();
+  });
+  try {
+    for (;;) {
+      Buf b;
+      {
+        std::unique_lock<std::mutex> lk(mu);
+        cv.wait(lk, [&] { return !q.empty() || done; });
+        if (q.empty()) break;
+        b = std::move(q.front());
+        q.pop_front();
+      }
+      cv.notify_all();
+      fn(b.first, b.n, b.idx.data(), b.xyz.data());
+      std::lock_guard<std::mutex> lk(mu);
+      spare.push_back(std::move(b));
+    }
+  } catch (...) {
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      stop = true;
+    }
+    cv.notify_all();
+    prod.join();
+    throw;
+  }
+  prod.join();
+  if (err) std::rethrow_exception(err);
+}
+
 /// Removes its files on scope exit.
 struct TempFiles {
   std::vector<std::string> paths;
@@ -941,23 +1023,60 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   FrameAccumulator acc;
   std::uint64_t s1 = 0, s2 = 0;
   const bool check_closed = src.num_vertices() < (std::uint64_t(1) << 31);
-  src.scan([&](std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const float* v = xyz + 9 * i;
-      acc.add({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
-      if (check_closed)
-        for (int k = 0; k < 3; ++k) {
-          const std::uint64_t u = idx[3 * i + std::size_t(k)], w = idx[3 * i + std::size_t((k + 1) % 3)];
-          if (u == w) continue;
-          s1 += mix64(u << 32 | w) - mix64(w << 32 | u);
-          s2 += mix64((w << 32 | u) ^ 0x5851f42d4c957f2dull) - mix64((u << 32 | w) ^ 0x5851f42d4c957f2dull);
+  {
+    // Per chunk, in parallel: each triangle's edge-length sum (the very expression
+    // FrameAccumulator::add adds), per-block boxes and closedness sums; then the edge sums are
+    // added in input order, so the total is the in-memory build's double, bit for bit.
+    constexpr std::size_t kBlock = 4096;
+    std::vector<double> edge(kChunk);
+    std::vector<Box3d> boxes(kChunk / kBlock + 1);
+    std::vector<std::uint64_t> h1(kChunk / kBlock + 1), h2(kChunk / kBlock + 1);
+    prefetch_scan(src, [&](std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz) {
+      if (edge.size() < n) {
+        edge.resize(n);
+        boxes.resize(n / kBlock + 1);
+        h1.resize(n / kBlock + 1);
+        h2.resize(n / kBlock + 1);
+      }
+      const std::size_t nb = (n + kBlock - 1) / kBlock;
+      auto block = [&](std::size_t bi) {
+        Box3d bb;
+        std::uint64_t a1 = 0, a2 = 0;
+        for (std::size_t i = bi * kBlock; i < std::min(n, (bi + 1) * kBlock); ++i) {
+          const float* v = xyz + 9 * i;
+          const Vec3d a{v[0], v[1], v[2]}, b{v[3], v[4], v[5]}, c{v[6], v[7], v[8]};
+          bb.add(a); bb.add(b); bb.add(c);
+          edge[i] = norm(b - a) + norm(c - b) + norm(a - c);
+          if (check_closed)
+            for (int k = 0; k < 3; ++k) {
+              const std::uint64_t u = idx[3 * i + std::size_t(k)], w = idx[3 * i + std::size_t((k + 1) % 3)];
+              if (u == w) continue;
+              a1 += mix64(u << 32 | w) - mix64(w << 32 | u);
+              a2 += mix64((w << 32 | u) ^ 0x5851f42d4c957f2dull) - mix64((u << 32 | w) ^ 0x5851f42d4c957f2dull);
+            }
         }
-    }
-    if ((first / kChunk) % 16 == 0) {
-      check();
-      if (src.num_triangles()) progress("frame", 0.05 * double(first) / double(src.num_triangles()));
-    }
-  });
+        boxes[bi] = bb;
+        h1[bi] = a1;
+        h2[bi] = a2;
+      };
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t bi = r.begin(); bi != r.end(); ++bi) block(bi);
+        });
+      });
+      for (std::size_t bi = 0; bi < nb; ++bi) {
+        acc.bb.add(boxes[bi]);
+        s1 += h1[bi];
+        s2 += h2[bi];
+      }
+      for (std::size_t i = 0; i < n; ++i) acc.edge_sum += edge[i];
+      acc.triangles += n;
+      if ((first / kChunk) % 16 == 0) {
+        check();
+        if (src.num_triangles()) progress("frame", std::min(0.05, 0.05 * double(first) / double(src.num_triangles())));
+      }
+    });
+  }
   const std::uint64_t nt = acc.triangles;
   if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
   if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
@@ -1010,7 +1129,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   {
     tbb::enumerable_thread_specific<std::vector<Rec>> local;
     tbb::enumerable_thread_specific<std::vector<std::uint64_t>> local_ms;
-    src.scan([&](std::uint64_t first, std::size_t n, const std::uint32_t*, const float* xyz) {
+    prefetch_scan(src, [&](std::uint64_t first, std::size_t n, const std::uint32_t*, const float* xyz) {
       check();
       arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1091,59 +1210,134 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
       if (const Rec* r = readers[h.run]->peek()) heap.push({r->m, r->t, h.run});
       return true;
     };
-    const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 5) / (sizeof(Rec) + sizeof(LeafTri) + 64));
-    std::vector<Rec> batch;
-    std::vector<std::size_t> starts;
-    std::uint64_t consumed = 0;
-    auto process = [&] {
-      const std::size_t nl = starts.size();
-      starts.push_back(batch.size());
-      std::vector<Node> nodes(nl);
-      std::vector<Leaf> leaves(nl);
-      std::vector<std::vector<LeafTri>> blocks(nl);
-      std::vector<NodeTmp> tmps(nl);
-      std::vector<LeafHalves> halves(nl);
-      auto one = [&](std::size_t i) {
-        const std::size_t b = starts[i], e = starts[i + 1];
-        std::vector<std::uint32_t> tri(e - b);
-        std::vector<float> xyz(9 * (e - b));
-        for (std::size_t k = b; k < e; ++k) {
-          tri[k - b] = batch[k].t;
-          std::memcpy(&xyz[9 * (k - b)], batch[k].xyz, sizeof batch[k].xyz);
-        }
-        blocks[i].resize(e - b);
-        const Octcode code = octcode_make(L, batch[b].m);
-        build_leaf(ctx, code, e - b, tri.data(), xyz.data(), &nodes[i], &leaves[i], blocks[i].data(), &tmps[i], &halves[i]);
-      };
-      if (threads <= 1 || nl < 2) {
-        for (std::size_t i = 0; i < nl; ++i) one(i);
-      } else {
-        arena.execute([&] {
-          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
-          });
-        });
-      }
-      for (std::size_t i = 0; i < nl; ++i)
-        as.add_leaf(batch[starts[i]].m, nodes[i], leaves[i], std::move(blocks[i]), std::move(tmps[i]), halves[i]);
-      consumed += batch.size();
-      batch.clear();
-      starts.clear();
-      check();
-      progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
+    // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
+    // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
+    // 3 batches alive (built, queued, assembling), each ≈ avail/12.
+    const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + sizeof(LeafTri) + 64));
+    struct Built {
+      std::vector<std::uint64_t> m;
+      std::vector<Node> nodes;
+      std::vector<Leaf> leaves;
+      std::vector<std::vector<LeafTri>> blocks;
+      std::vector<NodeTmp> tmps;
+      std::vector<LeafHalves> halves;
     };
-    Rec r;
-    while (next(&r)) {
-      if (batch.empty() || batch.back().m != r.m) {
-        if (batch.size() >= batch_cap) process();
-        starts.push_back(batch.size());
+    std::mutex mu;
+    std::condition_variable cv;
+    std::deque<Built> queue;
+    bool closing = false, failed = false;
+    std::exception_ptr asm_err;
+    std::thread assembler([&] {
+      try {
+        for (;;) {
+          Built bt;
+          {
+            std::unique_lock<std::mutex> lk(mu);
+            cv.wait(lk, [&] { return !queue.empty() || closing; });
+            if (queue.empty()) break;
+            bt = std::move(queue.front());
+            queue.pop_front();
+          }
+          cv.notify_all();
+          for (std::size_t i = 0; i < bt.m.size(); ++i)
+            as.add_leaf(bt.m[i], bt.nodes[i], bt.leaves[i], std::move(bt.blocks[i]), std::move(bt.tmps[i]), bt.halves[i]);
+        }
+        bool f;
+        {
+          std::lock_guard<std::mutex> lk(mu);
+          f = failed;
+        }
+        if (!f) as.finish();
+      } catch (...) {
+        std::lock_guard<std::mutex> lk(mu);
+        asm_err = std::current_exception();
+        failed = true;
       }
-      batch.push_back(r);
+      cv.notify_all();
+    });
+    auto stop_assembler = [&] {
+      {
+        std::lock_guard<std::mutex> lk(mu);
+        closing = true;
+      }
+      cv.notify_all();
+      assembler.join();
+    };
+    try {
+      std::vector<Rec> batch;
+      std::vector<std::size_t> starts;
+      std::uint64_t consumed = 0;
+      auto process = [&] {
+        const std::size_t nl = starts.size();
+        starts.push_back(batch.size());
+        Built bt;
+        bt.m.resize(nl);
+        bt.nodes.resize(nl);
+        bt.leaves.resize(nl);
+        bt.blocks.resize(nl);
+        bt.tmps.resize(nl);
+        bt.halves.resize(nl);
+        auto one = [&](std::size_t i) {
+          const std::size_t b = starts[i], e = starts[i + 1];
+          std::vector<std::uint32_t> tri(e - b);
+          std::vector<float> xyz(9 * (e - b));
+          for (std::size_t k = b; k < e; ++k) {
+            tri[k - b] = batch[k].t;
+            std::memcpy(&xyz[9 * (k - b)], batch[k].xyz, sizeof batch[k].xyz);
+          }
+          bt.blocks[i].resize(e - b);
+          bt.m[i] = batch[b].m;
+          const Octcode code = octcode_make(L, batch[b].m);
+          build_leaf(ctx, code, e - b, tri.data(), xyz.data(), &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
+                     &bt.tmps[i], &bt.halves[i]);
+        };
+        if (threads <= 1 || nl < 2) {
+          for (std::size_t i = 0; i < nl; ++i) one(i);
+        } else {
+          arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+              for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
+            });
+          });
+        }
+        {
+          std::unique_lock<std::mutex> lk(mu);
+          cv.wait(lk, [&] { return queue.size() < 1 || failed; });
+          if (failed) return;
+          queue.push_back(std::move(bt));
+        }
+        cv.notify_all();
+        consumed += batch.size();
+        batch.clear();
+        starts.clear();
+        check();
+        progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
+      };
+      Rec r;
+      while (next(&r)) {
+        if (batch.empty() || batch.back().m != r.m) {
+          if (batch.size() >= batch_cap) {
+            process();
+            if (failed) break;
+          }
+          starts.push_back(batch.size());
+        }
+        batch.push_back(r);
+      }
+      if (!batch.empty() && !failed) process();
+      std::vector<Rec>().swap(run);
+    } catch (...) {
+      {
+        std::lock_guard<std::mutex> lk(mu);
+        failed = true;
+        queue.clear();
+      }
+      stop_assembler();
+      throw;
     }
-    if (!batch.empty()) process();
-    std::vector<Rec>().swap(run);
+    stop_assembler();
+    if (asm_err) std::rethrow_exception(asm_err);
   }
-  as.finish();
   R.seconds_merge_build = since(t0);
   // The runs are no longer needed.
   for (const std::string& p : run_files.paths) ::unlink(p.c_str());

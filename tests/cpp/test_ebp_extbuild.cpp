@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -253,7 +254,7 @@ TEST(EbpExtBuild, FailuresLeaveNothing) {
   {
     auto src = make_memory_source(m.vertices, m.triangles);
     ExtBuildOptions o = tiny_options(d);
-    int calls = 0;
+    std::atomic<int> calls{0};  // called from the build's threads
     o.check = [&calls] {
       if (++calls == 3) throw std::runtime_error("interrupted");
     };
