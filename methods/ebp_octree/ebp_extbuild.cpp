@@ -56,10 +56,14 @@ constexpr std::size_t kChunk = 1 << 16;  // triangles per scan chunk
 class MemorySource final : public TriangleSource {
  public:
   MemorySource(const std::vector<Vec3d>& v, const std::vector<std::array<std::uint32_t, 3>>& t) : v_(v), t_(t) {
-    for (const Vec3d& p : v_)
+    vf_.reserve(3 * v_.size());
+    for (const Vec3d& p : v_) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
+      for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k]));
+    }
   }
+  const float* float_vertices() const override { return vf_.data(); }
   std::uint64_t num_triangles() const override { return t_.size(); }
   std::uint64_t num_vertices() const override { return v_.size(); }
   void scan(const Chunk& f) override {
@@ -79,10 +83,11 @@ class MemorySource final : public TriangleSource {
       f(first, n, idx.data(), xyz.data());
     }
   }
-  std::size_t resident_bytes() const override { return 0; }
+  std::size_t resident_bytes() const override { return vf_.capacity() * sizeof(float); }
 
  private:
   const std::vector<Vec3d>& v_;
+  std::vector<float> vf_;
   const std::vector<std::array<std::uint32_t, 3>>& t_;
 };
 
@@ -94,7 +99,8 @@ class LoadedSource final : public TriangleSource {
   std::uint64_t num_vertices() const override { return inner_.num_vertices(); }
   void scan(const Chunk& f) override { inner_.scan(f); }
   std::string sha256() const override { return mesh_.sha256; }
-  std::size_t resident_bytes() const override { return mesh_.bytes(); }
+  const float* float_vertices() const override { return inner_.float_vertices(); }
+  std::size_t resident_bytes() const override { return mesh_.bytes() + inner_.resident_bytes(); }
 
  private:
   bvhbench::Mesh mesh_;
@@ -234,6 +240,7 @@ class PlySource final : public TriangleSource {
   std::uint64_t num_triangles() const override { return ntri_; }
   std::uint64_t num_vertices() const override { return lay_.nv; }
   std::string sha256() const override { return sha_; }
+  const float* float_vertices() const override { return v_.data(); }
   std::size_t resident_bytes() const override { return v_.capacity() * sizeof(float) + (std::size_t(4) << 20); }
   bool streaming() const override { return true; }
 
@@ -344,12 +351,14 @@ class PlySource final : public TriangleSource {
 // ---------------------------------------------------------------------------------------------
 // Records, runs, merge
 struct Rec {
-  std::uint64_t m;  // leaf Morton code
-  std::uint32_t t;  // triangle
-  float xyz[9];
+  std::uint64_t m;     // leaf Morton code
+  std::uint32_t t;     // triangle
+  std::uint32_t v[3];  // its vertices (coordinates: TriangleSource::float_vertices())
 };
-static_assert(sizeof(Rec) == 48, "Rec is 48 bytes");
-inline bool rec_less(const Rec& a, const Rec& b) { return a.m < b.m || (a.m == b.m && a.t < b.t); }
+static_assert(sizeof(Rec) == 24, "Rec is 24 bytes");
+struct RecLess {
+  bool operator()(const Rec& a, const Rec& b) const { return a.m < b.m || (a.m == b.m && a.t < b.t); }
+};
 
 struct RunFile {
   std::string path;
@@ -1104,7 +1113,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   std::vector<Rec> run;
   run.reserve(std::min<std::size_t>(run_cap, std::size_t(nt) * 3 + 64));
   auto sort_run = [&] {
-    arena.execute([&] { tbb::parallel_sort(run.begin(), run.end(), rec_less); });
+    arena.execute([&] { tbb::parallel_sort(run.begin(), run.end(), RecLess()); });
   };
   auto spill = [&] {
     if (run.empty()) return;
@@ -1129,7 +1138,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   {
     tbb::enumerable_thread_specific<std::vector<Rec>> local;
     tbb::enumerable_thread_specific<std::vector<std::uint64_t>> local_ms;
-    prefetch_scan(src, [&](std::uint64_t first, std::size_t n, const std::uint32_t*, const float* xyz) {
+    prefetch_scan(src, [&](std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz) {
       check();
       arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1141,7 +1150,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
             distribute_triangle(ctx, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, ms);
             Rec rec;
             rec.t = std::uint32_t(first + i);
-            std::memcpy(rec.xyz, v, sizeof rec.xyz);
+            std::memcpy(rec.v, idx + 3 * i, sizeof rec.v);
             for (std::uint64_t m : ms) {
               rec.m = m;
               out.push_back(rec);
@@ -1213,6 +1222,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
     // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
     // 3 batches alive (built, queued, assembling), each ≈ avail/12.
+    const float* vf = src.float_vertices();
     const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + sizeof(LeafTri) + 64));
     struct Built {
       std::vector<std::uint64_t> m;
@@ -1283,7 +1293,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
           std::vector<float> xyz(9 * (e - b));
           for (std::size_t k = b; k < e; ++k) {
             tri[k - b] = batch[k].t;
-            std::memcpy(&xyz[9 * (k - b)], batch[k].xyz, sizeof batch[k].xyz);
+            for (int c = 0; c < 3; ++c) std::memcpy(&xyz[9 * (k - b) + 3 * std::size_t(c)], vf + 3 * std::size_t(batch[k].v[c]), 12);
           }
           bt.blocks[i].resize(e - b);
           bt.m[i] = batch[b].m;

@@ -28,6 +28,9 @@ class TriangleSource {
   virtual void scan(const Chunk& f) = 0;
   /// sha256 of the file's bytes (after one complete scan); "" for meshes made in code.
   virtual std::string sha256() const { return ""; }
+  /// The vertices as float (x, y, z per vertex, 3 × num_vertices()), held by the source: the
+  /// sorted records carry vertex indices and the leaves read their coordinates here.
+  virtual const float* float_vertices() const = 0;
   /// Memory the source holds (its float vertices, buffers).
   virtual std::size_t resident_bytes() const = 0;
   /// Whether the source streams the file (false: the whole mesh was loaded, see OUT_OF_CORE.md).

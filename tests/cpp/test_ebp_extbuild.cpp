@@ -103,7 +103,7 @@ ExtBuildOptions tiny_options(const TmpDir& d, std::size_t page = 4096) {
   ExtBuildOptions o;
   o.params.threads = 2;
   o.memory_budget = 1;     // the floor: the build still works
-  o.run_bytes = 48 * 97;   // 97 records per sorted run: many runs, a deep merge
+  o.run_bytes = 24 * 97;   // 97 records per sorted run: many runs, a deep merge
   o.page_target = page;
   o.tmp_dir = d.runs();
   o.info_json = [](const ExtBuildReport&) { return std::string(R"({"test":true})"); };
