@@ -281,3 +281,59 @@ TEST(EbpExtBuild, FailuresLeaveNothing) {
     EXPECT_FALSE(fs::exists(out));
   }
 }
+
+TEST(EbpExtBuild, StreamedPlyWithPolygonsAndExtraProperties) {
+  // Quads and a pentagon (fan-triangulated like load_mesh), double coordinates, an extra vertex
+  // property, ushort counts and uint indices: streamed, same triangles and store as loaded.
+  TmpDir d;
+  const int n = 24;
+  std::vector<std::array<double, 3>> v;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double u = 2 * M_PI * i / n, w = 2 * M_PI * j / n;
+      v.push_back({(1 + 0.4 * std::cos(w)) * std::cos(u), (1 + 0.4 * std::cos(w)) * std::sin(u), 0.4 * std::sin(w)});
+    }
+  auto id = [&](int i, int j) { return std::uint32_t(((i + n) % n) * n + (j + n) % n); };
+  std::vector<std::vector<std::uint32_t>> faces;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+  faces[5] = {faces[5][0], faces[5][1], faces[5][2], faces[5][3], faces[5][0]};  // a degenerate pentagon
+  std::string h = "ply\nformat binary_little_endian 1.0\ncomment test\nelement vertex " + std::to_string(v.size()) +
+                  "\nproperty double x\nproperty double y\nproperty double z\nproperty uchar flag\nelement face " +
+                  std::to_string(faces.size()) + "\nproperty list ushort uint vertex_indices\nend_header\n";
+  std::ofstream out(d.file("q.ply"), std::ios::binary);
+  out.write(h.data(), std::streamsize(h.size()));
+  for (const auto& p : v) {
+    out.write(reinterpret_cast<const char*>(p.data()), 24);
+    const char flag = 7;
+    out.write(&flag, 1);
+  }
+  for (const auto& f : faces) {
+    const std::uint16_t c = std::uint16_t(f.size());
+    out.write(reinterpret_cast<const char*>(&c), 2);
+    out.write(reinterpret_cast<const char*>(f.data()), std::streamsize(4 * f.size()));
+  }
+  out.close();
+  const bvhbench::Mesh loaded = bvhbench::load_mesh(d.file("q.ply"));
+  auto src = open_mesh_source(d.file("q.ply"));
+  EXPECT_TRUE(src->streaming());
+  const std::string a = d.file("a.ebp"), b = d.file("b.ebp");
+  build_store_external(*src, a, tiny_options(d));
+  EXPECT_EQ(src->num_triangles(), loaded.num_triangles());
+  EXPECT_EQ(src->sha256(), loaded.sha256);
+  auto msrc = make_memory_source(loaded.vertices, loaded.triangles);
+  build_store_external(*msrc, b, tiny_options(d));
+  const auto fa = read_range(a, 0, std::size_t(fs::file_size(a))), fb = read_range(b, 0, std::size_t(fs::file_size(b)));
+  EXPECT_TRUE(fa == fb) << "streamed and in-memory sources give the same file";
+  // An index out of range in the file: an InputError naming the file.
+  {
+    std::fstream f(d.file("q.ply"), std::ios::binary | std::ios::in | std::ios::out);
+    f.seekp(std::streamoff(h.size() + v.size() * 25 + 2));
+    const std::uint32_t bad = std::uint32_t(v.size());
+    f.write(reinterpret_cast<const char*>(&bad), 4);
+  }
+  auto bad = open_mesh_source(d.file("q.ply"));
+  EXPECT_THROW(build_store_external(*bad, d.file("c.ebp"), tiny_options(d)), bvhbench::InputError);
+  EXPECT_FALSE(fs::exists(d.file("c.ebp")));
+  EXPECT_TRUE(fs::is_empty(d.runs()));
+}
