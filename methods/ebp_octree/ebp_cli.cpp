@@ -280,6 +280,7 @@ void add_build_command(CLI::App& ebp_cmd) {
                        {"spill_bytes", rep.spill_bytes},
                        {"records", rep.records},
                        {"skeleton_bytes", rep.skeleton_bytes},
+                       {"min_budget_bytes", rep.min_budget_bytes},
                        {"streamed_mesh", streaming},
                        {"seconds", {{"frame", rep.seconds_frame}, {"distribute", rep.seconds_distribute},
                                     {"merge_build", rep.seconds_merge_build}, {"colour", rep.seconds_colour}}}};
@@ -295,6 +296,10 @@ void add_build_command(CLI::App& ebp_cmd) {
                     rep.seconds_distribute, rep.seconds_merge_build, rep.seconds_colour);
         std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
                     double(peak) <= budget ? "" : " (EXCEEDED, see OUT_OF_CORE.md: what is bounded)");
+        if (double(rep.min_budget_bytes) > budget)
+          std::printf("note: this model needs a budget of at least %.0f MiB (float vertices %.0f MiB, node skeleton "
+                      "and top tree, fixed reserve)\n",
+                      double(rep.min_budget_bytes) / 1048576.0, double(src->resident_bytes()) / 1048576.0);
       }
       return;
     }

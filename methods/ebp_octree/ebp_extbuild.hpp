@@ -68,6 +68,9 @@ struct ExtBuildReport {
   std::uint64_t pages = 0, file_bytes = 0;
   std::uint64_t runs = 0, run_capacity_records = 0, spill_bytes = 0, records = 0;
   std::uint64_t skeleton_bytes = 0, top_nodes = 0;
+  /// What the build sets aside before its working memory (float vertices, skeleton and top tree
+  /// estimate, a fixed reserve) + 8 MiB: a smaller budget is exceeded.
+  std::uint64_t min_budget_bytes = 0;
   double seconds_frame = 0, seconds_distribute = 0, seconds_merge_build = 0, seconds_colour = 0, seconds_total = 0;
 };
 
