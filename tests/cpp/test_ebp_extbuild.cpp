@@ -5,6 +5,7 @@
 // temporary files.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -336,4 +337,24 @@ TEST(EbpExtBuild, StreamedPlyWithPolygonsAndExtraProperties) {
   EXPECT_THROW(build_store_external(*bad, d.file("c.ebp"), tiny_options(d)), bvhbench::InputError);
   EXPECT_FALSE(fs::exists(d.file("c.ebp")));
   EXPECT_TRUE(fs::is_empty(d.runs()));
+}
+
+TEST(EbpExtBuild, CliFileSizeLimitLeavesNothing) {
+  // "Disk full": a file-size limit (SIGXFSZ ignored, so the write fails with EFBIG) stops the
+  // build midway through the pages; the command says so and leaves neither the store nor temp files.
+  TmpDir d;
+  const std::string out = d.file("x.ebp");
+  fs::create_directory(d.p / "tmp");
+  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f 400; exec " + std::string(BVHBENCH_EXE) +
+                          " --quiet ebp build --mesh " + shared_mesh("rocker-arm.obj") + " --out " + out +
+                          " --memory-budget 64 --page-kb 4 --tmp " + d.file("tmp") + " 2>" + d.file("err.txt") + "\"";
+  const int rc = std::system(cmd.c_str());
+  EXPECT_NE(WEXITSTATUS(rc), 0);
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(out + ".tmp"));
+  EXPECT_TRUE(fs::is_empty(d.p / "tmp"));
+  std::ifstream in(d.file("err.txt"));
+  const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(err.find("nothing written"), std::string::npos) << err;
+  EXPECT_NE(err.find("File too large"), std::string::npos) << err;
 }
