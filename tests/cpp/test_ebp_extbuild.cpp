@@ -202,6 +202,15 @@ TEST(EbpExtBuild, OpenMeshesSameStoreAsInMemory) {
 
 TEST(EbpExtBuild, OneTriangleAndOnePage) {
   check_same(one_triangle(), "one triangle");
+  {  // degenerate and repeated triangles, an unreferenced vertex
+    bvhbench::Mesh m = torus(30, 12);
+    m.vertices.push_back({5.0, 5.0, 5.0});
+    const std::uint32_t a = m.triangles[0][0], b = m.triangles[0][1];
+    m.triangles.push_back({a, a, b});
+    m.triangles.push_back(m.triangles[7]);
+    m.triangles.push_back({b, a, b});
+    check_same(m, "degenerate, repeated, unreferenced");
+  }
   check_same(torus(40, 20), "torus, one page", 1 << 26);
 }
 
