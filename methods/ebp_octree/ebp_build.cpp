@@ -30,6 +30,7 @@
 #include "polytope.hpp"
 #include "predicates.hpp"
 #include "tri_box.hpp"
+#include "ebp_build_parts.hpp"
 
 namespace ebp {
 
@@ -125,6 +126,8 @@ const std::vector<Vec3d>& ref_offsets() {
   return offs;
 }
 
+using detail::BuildContext;
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -164,13 +167,6 @@ double box_support(const Vec3d& lo, const Vec3d& hi, const Vec3d& n) {
          (n.z > 0 ? n.z * hi.z : n.z * lo.z);
 }
 
-// Temporary per-node build data.
-struct NodeTmp {
-  std::vector<Plane> planes;       // final (float) planes, root frame
-  std::vector<Vec3d> poly;         // vertices of the bounding volume (world)
-  double volume = 0, box_volume = 0;
-};
-
 /// Union-find with potentials: off[x] = w(x) - w(parent[x]), w the winding number.
 struct UnionFind {
   std::vector<std::uint32_t> parent;
@@ -209,7 +205,545 @@ struct UnionFind {
   }
 };
 
+/// Makes a float plane (root frame) from a unit direction and the support of `pts` (world).
+void make_plane(const BuildContext& ctx, const Vec3d& n, const std::vector<Vec3d>& pts, Plane* out) {
+  const Vec3d rc = ctx.f.root_centre;
+  const Vec3d nd = round_to_float(n);
+  double s = -std::numeric_limits<double>::infinity();
+  for (const Vec3d& v : pts) s = std::max(s, dot(nd, v - rc));
+  out->n[0] = float(nd.x); out->n[1] = float(nd.y); out->n[2] = float(nd.z);
+  out->d = round_up(s + ctx.plane_margin);
+}
+void plane_world(const BuildContext& ctx, const Plane& p, Vec3d* n, double* d) {
+  *n = Vec3d(double(p.n[0]), double(p.n[1]), double(p.n[2]));
+  *d = double(p.d) + dot(*n, ctx.f.root_centre);
+}
+
 }  // namespace
+
+namespace detail {
+
+void FrameAccumulator::add(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  bb.add(a); bb.add(b); bb.add(c);
+  edge_sum += norm(b - a) + norm(c - b) + norm(a - c);
+  ++triangles;
+}
+
+void Frame::cell_box(Octcode c, Vec3d* lo, Vec3d* hi) const {
+  std::uint32_t x, y, z;
+  octcode_cell(c, &x, &y, &z);
+  const double s = cell_size(octcode_level(c));
+  *lo = {root_lo.x + double(x) * s, root_lo.y + double(y) * s, root_lo.z + double(z) * s};
+  *hi = {root_lo.x + double(x + 1) * s, root_lo.y + double(y + 1) * s, root_lo.z + double(z + 1) * s};
+}
+
+Frame compute_frame(const FrameAccumulator& acc, const BuildParams& prm) {
+  Frame F;
+  const Box3d& bb = acc.bb;
+  const double avg_edge = acc.edge_sum / (3.0 * double(acc.triangles));
+  const Vec3d centre = (bb.lo + bb.hi) * 0.5;
+  const Vec3d ext = bb.extent();
+  double m = std::max({ext.x, ext.y, ext.z});
+  const double cmag = std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
+  m = std::max(m, 1e-6 * (cmag + 1e-30));
+  if (m == 0) m = 1e-30;
+  // Enlarge by 0.1 % (a margin on every side), then round the size to 20 significant bits and
+  // the corner to a multiple of size / 2^39, so that every cell boundary at every level is an
+  // exactly representable double, computed exactly by cell_box().
+  const double s0 = m * 1.001;
+  const int j = int(std::ceil(std::log2(s0))) - 20;
+  const double M = std::ceil(std::ldexp(s0, -j));
+  F.root_size = std::ldexp(M, j);
+  const double unit = std::ldexp(1.0, j - kMaxLevel);
+  for (int k = 0; k < 3; ++k) F.root_lo[k] = std::floor((centre[k] - 0.5 * F.root_size) / unit) * unit;
+  F.root_centre = F.root_lo + Vec3d(0.5, 0.5, 0.5) * F.root_size;
+  const int max_level = std::clamp(prm.max_level, 1, kMaxLevel);
+  int L = 1;
+  const double target = prm.leaf_factor * avg_edge;
+  while (L < max_level && F.root_size / double(1u << (L + 1)) >= target) ++L;
+  F.leaf_level = L;
+  F.average_edge = avg_edge;
+  return F;
+}
+
+BuildContext::BuildContext(const Frame& frame, const BuildParams& prm)
+    : f(frame),
+      cs(frame.cell_size(frame.leaf_level)),
+      G(1u << frame.leaf_level),
+      cos_cluster(std::cos(prm.cluster_angle * M_PI / 180.0)),
+      max_planes(std::max(0, prm.max_planes)),
+      plane_margin(1e-9 * frame.root_size) {}
+
+void distribute_triangle(const BuildContext& ctx, const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                         std::vector<std::uint64_t>& out) {
+  const double cs = ctx.cs;
+  const std::uint32_t G = ctx.G;
+  const Vec3d& rl = ctx.f.root_lo;
+  auto cell_range = [&](double lo, double hi, double r, double ext_rel, std::uint32_t* ia, std::uint32_t* ib) {
+    const double slack = 1e-6 + 2e-9 * std::max(1.0, ext_rel);
+    double fa = std::floor((lo - r) / cs - slack), fb = std::floor((hi - r) / cs + slack);
+    fa = std::clamp(fa, 0.0, double(G - 1));
+    fb = std::clamp(fb, 0.0, double(G - 1));
+    *ia = std::uint32_t(fa);
+    *ib = std::uint32_t(fb);
+  };
+  Box3d tb;
+  tb.add(a); tb.add(b); tb.add(c);
+  const double ext_rel = tb.diagonal() / cs;
+  std::uint32_t x0, x1, y0, y1, z0, z1;
+  cell_range(tb.lo.x, tb.hi.x, rl.x, ext_rel, &x0, &x1);
+  cell_range(tb.lo.y, tb.hi.y, rl.y, ext_rel, &y0, &y1);
+  cell_range(tb.lo.z, tb.hi.z, rl.z, ext_rel, &z0, &z1);
+  for (std::uint32_t z = z0; z <= z1; ++z)
+    for (std::uint32_t y = y0; y <= y1; ++y)
+      for (std::uint32_t x = x0; x <= x1; ++x) {
+        const Vec3d lo{rl.x + double(x) * cs, rl.y + double(y) * cs, rl.z + double(z) * cs};
+        const Vec3d hi{rl.x + double(x + 1) * cs, rl.y + double(y + 1) * cs, rl.z + double(z + 1) * cs};
+        const bool single = x0 == x1 && y0 == y1 && z0 == z1;
+        if (single || tri_box_overlap(lo, hi, a, b, c)) out.push_back(morton_encode(x, y, z));
+      }
+}
+
+Vec3d face_portal(const Frame& f, std::uint32_t x, std::uint32_t y, std::uint32_t z, int dir) {
+  const int axis = dir >> 1;
+  const double cs = f.cell_size(f.leaf_level);
+  const std::int64_t c[3] = {x, y, z};
+  // Fixed, non-dyadic fractions of the face (a mesh vertex there is unlikely; if a triangle does
+  // pass through the portal the adjacency is degenerate and skipped, as any other).
+  static const double frac[3] = {0.4137, 0.5629, 0.4871};
+  Vec3d p;
+  for (int k = 0; k < 3; ++k) {
+    if (k == axis) {
+      const std::int64_t face = c[k] + ((dir & 1) ? 1 : 0);
+      p[k] = f.root_lo[k] + double(face) * cs;
+    } else {
+      p[k] = f.root_lo[k] + (double(c[k]) + frac[k]) * cs;
+    }
+  }
+  return p;
+}
+
+void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std::uint32_t* tri, const float* xyz,
+                Node* ndp, Leaf* lfp, LeafTri* out, NodeTmp* tmp, LeafHalves* halves) {
+  Node& nd = *ndp;
+  Leaf& lf = *lfp;
+  const double cs = ctx.cs;
+  const int max_planes = ctx.max_planes;
+  const double cos_cluster = ctx.cos_cluster;
+  nd.code = code;
+  nd.kind = NodeKind::leaf;
+  nd.plane_begin = 0;
+  nd.plane_count = 0;
+  Vec3d lo, hi;
+  ctx.f.cell_box(code, &lo, &hi);
+  const Vec3d cc = (lo + hi) * 0.5;
+  const Vec3d cfd = round_to_float(cc);
+  lf.centre[0] = float(cfd.x); lf.centre[1] = float(cfd.y); lf.centre[2] = float(cfd.z);
+  lf.tri_count = std::uint32_t(n);
+  lf.pad = 0;
+  double R = 0.5 * cs * std::sqrt(3.0) + norm(cc - cfd);
+  std::vector<Vec3d> geo;  // vertices of triangle ∩ cell polygons
+  struct Cand { Vec3d n; double area; std::uint32_t t; };
+  std::vector<Cand> cands;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t t = tri[k];
+    LeafTri& r = out[k];
+    const float* v = xyz + 9 * k;
+    const Vec3d a{double(v[0]), double(v[1]), double(v[2])}, b{double(v[3]), double(v[4]), double(v[5])},
+        c{double(v[6]), double(v[7]), double(v[8])};
+    for (int q = 0; q < 3; ++q) { r.a[q] = v[q]; r.b[q] = v[3 + q]; r.c[q] = v[6 + q]; }
+    r.tri = t;
+    r.flags = 0;
+    r.pad = 0;
+    const bool degen = collinear_exact(a, b, c);
+    const Vec3d nrm = cross(b - a, c - a);
+    const double len = norm(nrm);
+    if (degen) r.flags |= kDegenerate;
+    if (!degen && len >= 1e-6 * norm(b - a) * norm(c - a)) {
+      const Vec3d nn = nrm / len;
+      const Vec3d nf = round_to_float(nn);
+      r.n[0] = float(nf.x); r.n[1] = float(nf.y); r.n[2] = float(nf.z);
+      r.d = float(dot(nf, a - cfd));
+      cands.push_back({nn, 0.5 * len, t});
+    } else {
+      r.n[0] = r.n[1] = r.n[2] = 0.f;
+      r.d = 0.f;
+    }
+    R = std::max({R, norm(a - cfd), norm(b - cfd), norm(c - cfd)});
+    clip_triangle_to_box(lo, hi, a, b, c, geo);
+  }
+  // (Hook: the LeafTri block out[0, n) is complete here.)
+  lf.eps = round_up(2e-6 * R);
+  if (geo.empty()) {  // touches only within the margin: bound by the cell's own centre
+    geo.push_back(cc);
+  }
+  // Bounding planes: greedy angular cover of the face normals (largest faces first), both
+  // orientations of each representative, offset to the support of the clipped geometry.
+  std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) {
+    return x.area > y.area || (x.area == y.area && x.t < y.t);
+  });
+  std::vector<Vec3d> reps;
+  for (const Cand& cd : cands) {
+    if (int(reps.size()) * 2 >= max_planes) break;
+    bool covered = false;
+    for (const Vec3d& r : reps)
+      if (std::fabs(dot(r, cd.n)) >= cos_cluster) { covered = true; break; }
+    if (!covered) reps.push_back(cd.n);
+  }
+  struct Scored { Plane p; double cut; };
+  std::vector<Scored> sc;
+  for (const Vec3d& r : reps)
+    for (double sgn : {1.0, -1.0}) {
+      Plane p;
+      make_plane(ctx, r * sgn, geo, &p);
+      Vec3d nw; double d;
+      plane_world(ctx, p, &nw, &d);
+      const double cut = box_support(lo, hi, nw) - d;
+      if (cut > 1e-4 * cs) sc.push_back({p, cut});
+    }
+  std::stable_sort(sc.begin(), sc.end(), [](const Scored& x, const Scored& y) { return x.cut > y.cut; });
+  if (int(sc.size()) > max_planes) sc.resize(std::size_t(max_planes));
+  NodeTmp& tm = *tmp;
+  tm.planes.clear();
+  Polytope poly = Polytope::box(lo, hi);
+  for (auto& s : sc) {
+    tm.planes.push_back(s.p);
+    Vec3d nw; double d;
+    plane_world(ctx, s.p, &nw, &d);
+    poly.clip(nw, d);
+  }
+  tm.poly = poly.vertices();
+  if (tm.poly.empty()) {  // numerically flat: fall back to the box corners (conservative)
+    tm.poly = Polytope::box(lo, hi).vertices();
+  }
+  tm.volume = poly.volume();
+  tm.box_volume = cs * cs * cs;
+  nd.plane_count = std::uint16_t(tm.planes.size());
+
+  // Configuration, on the exact face planes and the triangles' vertices.
+  // The distinct vertices (a small hash set on the float bits; the classification below does not
+  // depend on their order, only on which exist).
+  const LeafTri* blk = out;
+  std::vector<Vec3d> verts;
+  {
+    std::size_t cap = 16;
+    while (cap < 6 * std::size_t(lf.tri_count)) cap <<= 1;
+    struct Key { std::uint32_t x, y, z, used; };
+    std::vector<Key> set(cap, Key{0, 0, 0, 0});
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+      if (blk[k].flags & kDegenerate) continue;
+      for (const float* f : {blk[k].a, blk[k].b, blk[k].c}) {
+        Key key{0, 0, 0, 1};
+        std::memcpy(&key.x, &f[0], 4);
+        std::memcpy(&key.y, &f[1], 4);
+        std::memcpy(&key.z, &f[2], 4);
+        std::uint64_t h = (std::uint64_t(key.x) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(key.y) * 0xC2B2AE3D27D4EB4Full) ^
+                          (std::uint64_t(key.z) * 0x165667B19E3779F9ull);
+        h ^= h >> 29;
+        for (std::size_t i = std::size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+          Key& e = set[i];
+          if (!e.used) {
+            e = key;
+            verts.push_back(to_d(f));
+            break;
+          }
+          if (e.x == key.x && e.y == key.y && e.z == key.z) break;
+        }
+      }
+    }
+  }
+  bool convex = !verts.empty(), concave = !verts.empty();
+  for (std::uint32_t k = 0; k < lf.tri_count && (convex || concave); ++k) {
+    if (blk[k].flags & kDegenerate) continue;
+    const Vec3d a = to_d(blk[k].a), b = to_d(blk[k].b), c = to_d(blk[k].c);
+    for (const Vec3d& v : verts) {
+      const int o = orient3d(a, b, c, v);
+      if (o > 0) convex = false;
+      if (o < 0) concave = false;
+      if (!convex && !concave) break;
+    }
+  }
+  nd.config = convex ? LeafConfig::convex : concave ? LeafConfig::concave : LeafConfig::special;
+
+  // Reference point: strictly inside the cell, off every face plane; for convex (concave)
+  // leaves, preferably on the inner (outer) side of all of them, so that the common query needs
+  // no edge test.
+  const double half = 0.5 * cs;
+  int best_score = -1;
+  std::vector<std::uint8_t> sides(lf.tri_count), best_sides;
+  Vec3d best_ref = cc;
+  for (const Vec3d& off : ref_offsets()) {
+    const Vec3d r0 = cc + off * half;
+    const Vec3d r = round_to_float(r0);
+    if (!(r.x > lo.x && r.x < hi.x && r.y > lo.y && r.y < hi.y && r.z > lo.z && r.z < hi.z)) continue;
+    bool ok = true;
+    int inner = 0, outer = 0;
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+      if (blk[k].flags & kDegenerate) { sides[k] = 0; continue; }
+      const int o = orient3d(to_d(blk[k].a), to_d(blk[k].b), to_d(blk[k].c), r);
+      if (o == 0) { ok = false; break; }
+      sides[k] = o > 0;
+      (o > 0 ? outer : inner)++;
+    }
+    if (!ok) continue;
+    const int score = nd.config == LeafConfig::convex ? inner : nd.config == LeafConfig::concave ? outer : 0;
+    if (score > best_score) {
+      best_score = score;
+      best_ref = r;
+      best_sides = sides;
+      if (nd.config == LeafConfig::special || score == int(lf.tri_count)) break;
+    }
+  }
+  lf.ref_valid = best_score >= 0;
+  lf.ref[0] = float(best_ref.x); lf.ref[1] = float(best_ref.y); lf.ref[2] = float(best_ref.z);
+  lf.ref_winding = 0;
+  if (lf.ref_valid)
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k)
+      if (best_sides[k]) out[k].flags |= kRefPositive;
+
+  // Colouring half-edges: reference point -> portal of each face, over this leaf's triangles
+  // only (the segment lies in the closed cell, and every triangle meeting the closed cell is in
+  // the block: the distribution is conservative).
+  // This is segment_winding(ref, portal) with the reference's exact sides already known (every
+  // non-degenerate plane, nonzero) and the portal's side filtered by the leaf's float planes
+  // (|s| > eps decides, as in the queries; otherwise orient3d): the same result, cheaper.
+  for (int dir = 0; dir < 6; ++dir) halves->h[dir] = kDegenerateHalf;
+  if (lf.ref_valid) {
+    std::uint32_t x, y, z;
+    octcode_cell(code, &x, &y, &z);
+    const Vec3d ra = to_d(lf.ref);
+    const float eps = lf.eps;
+    for (int dir = 0; dir < 6; ++dir) {
+      const Vec3d q = face_portal(ctx.f, x, y, z, dir);
+      const float qx = float(q.x - double(lf.centre[0])), qy = float(q.y - double(lf.centre[1])),
+                  qz = float(q.z - double(lf.centre[2]));
+      int w = 0;
+      bool ok = true;
+      for (std::size_t k = 0; k < n && ok; ++k) {
+        const LeafTri& t = out[k];
+        if (t.flags & kDegenerate) continue;
+        const int sp = (t.flags & kRefPositive) ? 1 : -1;
+        const float s = t.n[0] * qx + t.n[1] * qy + t.n[2] * qz - t.d;
+        int sq;
+        if (s > eps) sq = 1;
+        else if (s < -eps) sq = -1;
+        else sq = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), q);
+        if (sq == sp) continue;
+        const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
+        const Cross r = sq != 0 ? segment_triangle(ra, q, sp, sq, a, b, c) : segment_triangle(q, ra, sq, sp, a, b, c);
+        if (r == Cross::degenerate || r == Cross::on_p) ok = false;
+        else if (r == Cross::proper) w += sp;
+      }
+      if (ok) halves->h[dir] = w;
+    }
+  }
+}
+
+void build_inner(const BuildContext& ctx, Octcode code, NodeTmp* const children[8], NodeTmp* tmp) {
+  Vec3d lo, hi;
+  ctx.f.cell_box(code, &lo, &hi);
+  const double csl = hi.x - lo.x;
+  std::vector<Vec3d> pts;
+  std::vector<Vec3d> cand;
+  for (int o = 0; o < 8; ++o) {
+    NodeTmp* ct = children[o];
+    if (!ct) continue;
+    pts.insert(pts.end(), ct->poly.begin(), ct->poly.end());
+    for (const Plane& p : ct->planes) cand.push_back({double(p.n[0]), double(p.n[1]), double(p.n[2])});
+    std::vector<Vec3d>().swap(ct->poly);  // children's volumes are no longer needed
+  }
+  struct Scored { Plane p; double cut; Vec3d n; };
+  std::vector<Scored> sc;
+  for (const Vec3d& nn : cand) {
+    Plane p;
+    make_plane(ctx, nn, pts, &p);
+    Vec3d nw; double d;
+    plane_world(ctx, p, &nw, &d);
+    const double cut = box_support(lo, hi, nw) - d;
+    if (cut > 1e-4 * csl) sc.push_back({p, cut, nw});
+  }
+  std::stable_sort(sc.begin(), sc.end(), [](const Scored& x, const Scored& y) { return x.cut > y.cut; });
+  NodeTmp& tm = *tmp;
+  tm.planes.clear();
+  std::vector<Vec3d> chosen;
+  for (const Scored& s : sc) {
+    if (int(tm.planes.size()) >= ctx.max_planes) break;
+    bool close = false;
+    for (const Vec3d& c : chosen)
+      if (dot(c, s.n) >= ctx.cos_cluster) { close = true; break; }
+    if (close) continue;
+    chosen.push_back(s.n);
+    tm.planes.push_back(s.p);
+  }
+  Polytope poly = Polytope::box(lo, hi);
+  for (const Plane& p : tm.planes) {
+    Vec3d nw; double d;
+    plane_world(ctx, p, &nw, &d);
+    poly.clip(nw, d);
+  }
+  tm.poly = poly.vertices();
+  if (tm.poly.empty()) tm.poly = Polytope::box(lo, hi).vertices();
+  tm.volume = poly.volume();
+  tm.box_volume = csl * csl * csl;
+}
+
+std::uint32_t Skeleton::locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+  std::uint32_t i = 0;
+  while (kind[i] == NodeKind::inner) {
+    const int shift = leaf_level - octcode_level(code[i]) - 1;
+    const int o = int((x >> shift) & 1u) | int(((y >> shift) & 1u) << 1) | int(((z >> shift) & 1u) << 2);
+    i = children[index[i] + std::uint32_t(o)];
+  }
+  return i;
+}
+
+std::size_t Skeleton::bytes() const {
+  return code.capacity() * sizeof(Octcode) + kind.capacity() + index.capacity() * 4 + children.capacity() * 4 +
+         leaf_node.capacity() * 4 + leaf_ref.capacity() * 12 + leaf_ref_valid.capacity() +
+         leaf_halves.capacity() * sizeof(LeafHalves);
+}
+
+Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
+  Colouring C;
+  const std::size_t N = sk.code.size();
+  const std::size_t nleaves = sk.leaf_node.size();
+  const int L = sk.leaf_level;
+  const std::uint32_t G = 1u << L;
+  C.ref_winding.assign(nleaves, 0);
+  const std::uint32_t OUT = std::uint32_t(N);
+  UnionFind uf(N + 1);
+  // Empty nodes touching the root's boundary are outside: the root is larger than the model's
+  // bounding box on every side.
+  for (std::size_t i = 0; i < N; ++i) {
+    if (sk.kind[i] != NodeKind::white) continue;
+    std::uint32_t x, y, z;
+    octcode_cell(sk.code[i], &x, &y, &z);
+    const std::uint32_t last = (1u << octcode_level(sk.code[i])) - 1;
+    if (x == 0 || y == 0 || z == 0 || x == last || y == last || z == last) uf.unite(std::uint32_t(i), OUT, 0);
+  }
+  // Adjacencies of leaves, in leaf order: w(target) - w(ref_A) from the two half-edges through the
+  // portal of the shared face (ref_A -> portal over A's triangles, portal -> ref_B over B's), or
+  // the one half-edge to the portal when the target is an empty node or the outside.
+  for (std::size_t li = 0; li < nleaves; ++li) {
+    if (!sk.leaf_ref_valid[li]) continue;
+    const std::uint32_t ni = sk.leaf_node[li];
+    std::uint32_t c[3];
+    octcode_cell(sk.code[ni], &c[0], &c[1], &c[2]);
+    for (int dir = 0; dir < 6; ++dir) {
+      const int axis = dir >> 1;
+      const bool pos = dir & 1;
+      std::uint32_t nb[3] = {c[0], c[1], c[2]};
+      std::uint32_t target;
+      bool to_leaf = false;
+      if ((!pos && c[axis] == 0) || (pos && c[axis] == G - 1)) {
+        target = OUT;
+      } else {
+        nb[axis] = pos ? c[axis] + 1 : c[axis] - 1;
+        target = sk.locate_cell(nb[0], nb[1], nb[2]);
+        to_leaf = sk.kind[target] == NodeKind::leaf;
+        if (to_leaf && !sk.leaf_ref_valid[sk.index[target]]) continue;
+      }
+      int pa, pb;
+      if (uf.find(ni, &pa) == uf.find(target, &pb)) continue;
+      const std::int32_t ha = sk.leaf_halves[li].h[dir];
+      const std::int32_t hb = to_leaf ? sk.leaf_halves[sk.index[target]].h[dir ^ 1] : 0;
+      if (ha == kDegenerateHalf || hb == kDegenerateHalf) { ++C.degenerate_edges; continue; }
+      // w(portal) - w(ref_A) = ha, w(portal) - w(ref_B) = hb.
+      uf.unite(ni, target, ha - hb);
+    }
+  }
+  // Empty nodes not yet joined: probe the cells just across their faces for joined empty nodes.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = 0; i < N; ++i) {
+      if (sk.kind[i] != NodeKind::white || uf.touched[i]) continue;
+      std::uint32_t c[3];
+      octcode_cell(sk.code[i], &c[0], &c[1], &c[2]);
+      const int l = octcode_level(sk.code[i]);
+      const std::uint32_t span = 1u << (L - l);
+      bool done = false;
+      for (int dir = 0; dir < 6 && !done; ++dir) {
+        const int axis = dir >> 1;
+        const bool pos = dir & 1;
+        for (int qd = 0; qd < 4 && !done; ++qd) {
+          std::uint32_t p[3];
+          for (int k = 0; k < 3; ++k) p[k] = c[k] * span;
+          const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+          p[a1] += (qd & 1) ? (3 * span) / 4 : span / 4;
+          p[a2] += (qd & 2) ? (3 * span) / 4 : span / 4;
+          if (pos) p[axis] += span; else if (p[axis] == 0) continue; else p[axis] -= 1;
+          if (p[axis] >= G) continue;
+          const std::uint32_t k = sk.locate_cell(p[0], p[1], p[2]);
+          if (k != i && sk.kind[k] == NodeKind::white && uf.touched[k]) {
+            uf.unite(std::uint32_t(i), k, 0);
+            done = changed = true;
+          }
+        }
+      }
+    }
+  }
+  // Windings. OUT has w = 0. Components not joined to the outside (only when every edge of a
+  // region was degenerate) take the generalized winding number of one of their points (the first
+  // node of the component in node order), computed for all such components in one batch.
+  int pout;
+  const std::uint32_t rout = uf.find(OUT, &pout);
+  std::vector<int> comp_w(N + 1, 0);
+  std::vector<std::uint8_t> comp_known(N + 1, 0);
+  comp_w[rout] = -pout;  // w(root) = w(OUT) - (w(OUT) - w(root))
+  comp_known[rout] = 1;
+  std::vector<Vec3d> fb_pts;
+  std::vector<std::pair<std::uint32_t, int>> fb_comp;  // root, pot of the point
+  auto point_of = [&](std::size_t i) {
+    if (sk.kind[i] == NodeKind::white) {
+      Vec3d lo, hi;
+      F.cell_box(sk.code[i], &lo, &hi);
+      return (lo + hi) * 0.5;
+    }
+    const auto& r = sk.leaf_ref[sk.index[i]];
+    return Vec3d(double(r[0]), double(r[1]), double(r[2]));
+  };
+  auto needs_colour = [&](std::size_t i) {
+    return sk.kind[i] == NodeKind::white || (sk.kind[i] == NodeKind::leaf && sk.leaf_ref_valid[sk.index[i]]);
+  };
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!needs_colour(i)) continue;
+    int pot;
+    const std::uint32_t r = uf.find(std::uint32_t(i), &pot);
+    if (comp_known[r]) continue;
+    comp_known[r] = 2;  // pending
+    fb_pts.push_back(point_of(i));
+    fb_comp.push_back({r, pot});
+  }
+  if (!fb_pts.empty()) {
+    const std::vector<int> w = winding_at(fb_pts);
+    for (std::size_t k = 0; k < fb_comp.size(); ++k) {
+      comp_w[fb_comp[k].first] = w[k] - fb_comp[k].second;
+      comp_known[fb_comp[k].first] = 1;
+    }
+    C.colour_fallbacks = fb_pts.size();
+  }
+  for (std::size_t i = 0; i < N; ++i) {
+    if (sk.kind[i] == NodeKind::white) {
+      int pot;
+      const std::uint32_t r = uf.find(std::uint32_t(i), &pot);
+      if (comp_w[r] + pot >= 1) C.black.push_back(std::uint32_t(i));
+    } else if (sk.kind[i] == NodeKind::leaf) {
+      const std::uint32_t li = sk.index[i];
+      if (sk.leaf_ref_valid[li]) {
+        int pot;
+        const std::uint32_t r = uf.find(std::uint32_t(i), &pot);
+        C.ref_winding[li] = std::int16_t(std::clamp(comp_w[r] + pot, -32768, 32767));
+      } else {
+        ++C.invalid_refs;
+      }
+    }
+  }
+  return C;
+}
+
+}  // namespace detail
+
+using namespace detail;
 
 Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array<std::uint32_t, 3>>& tin,
                      const BuildParams& prm, const std::function<void(double)>& progress) {
@@ -231,44 +765,25 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
       throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
     V[i] = round_to_float(v);
   }
-  Box3d bb;
-  double edge_sum = 0;
+  FrameAccumulator acc;
   for (const auto& t : tin) {
     for (int k = 0; k < 3; ++k)
       if (t[k] >= V.size()) throw std::invalid_argument("ebp_octree: vertex index out of range");
-    const Vec3d &a = V[t[0]], &b = V[t[1]], &c = V[t[2]];
-    bb.add(a); bb.add(b); bb.add(c);
-    edge_sum += norm(b - a) + norm(c - b) + norm(a - c);
+    acc.add(V[t[0]], V[t[1]], V[t[2]]);
   }
-  const double avg_edge = edge_sum / (3.0 * double(nt));
-  const Vec3d centre = (bb.lo + bb.hi) * 0.5;
-  const Vec3d ext = bb.extent();
-  double m = std::max({ext.x, ext.y, ext.z});
-  const double cmag = std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
-  m = std::max(m, 1e-6 * (cmag + 1e-30));
-  if (m == 0) m = 1e-30;
-  // Enlarge by 0.1 % (a margin on every side), then round the size to 20 significant bits and
-  // the corner to a multiple of size / 2^39, so that every cell boundary at every level is an
-  // exactly representable double, computed exactly by cell_box().
-  const double s0 = m * 1.001;
-  const int j = int(std::ceil(std::log2(s0))) - 20;
-  const double M = std::ceil(std::ldexp(s0, -j));
-  T.root_size = std::ldexp(M, j);
-  const double unit = std::ldexp(1.0, j - kMaxLevel);
-  for (int k = 0; k < 3; ++k) T.root_lo[k] = std::floor((centre[k] - 0.5 * T.root_size) / unit) * unit;
-  T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
-  const int max_level = std::clamp(prm.max_level, 1, kMaxLevel);
-  int L = 1;
-  const double target = prm.leaf_factor * avg_edge;
-  while (L < max_level && T.root_size / double(1u << (L + 1)) >= target) ++L;
-  T.leaf_level = L;
-  const double cs = T.cell_size(L);
-  const std::uint32_t G = 1u << L;
+  const Frame F = compute_frame(acc, prm);
+  const BuildContext ctx(F, prm);
+  T.root_lo = F.root_lo;
+  T.root_centre = F.root_centre;
+  T.root_size = F.root_size;
+  T.leaf_level = F.leaf_level;
+  const int L = F.leaf_level;
+  const double cs = ctx.cs;
   Stats& S = T.stats;
   S.leaf_level = L;
   S.root_size = T.root_size;
   S.leaf_size = cs;
-  S.average_edge = avg_edge;
+  S.average_edge = F.average_edge;
   S.triangles = nt;
   report(0.02);
 
@@ -276,44 +791,25 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
   auto t0 = Clock::now();
   std::vector<Pair> pairs;
   {
-    auto cell_range = [&](double lo, double hi, double rl, double ext_rel, std::uint32_t* a, std::uint32_t* b) {
-      const double slack = 1e-6 + 2e-9 * std::max(1.0, ext_rel);
-      double fa = std::floor((lo - rl) / cs - slack), fb = std::floor((hi - rl) / cs + slack);
-      fa = std::clamp(fa, 0.0, double(G - 1));
-      fb = std::clamp(fb, 0.0, double(G - 1));
-      *a = std::uint32_t(fa);
-      *b = std::uint32_t(fb);
-    };
-    auto distribute = [&](std::size_t t, std::vector<Pair>& out) {
-      const Vec3d &a = V[tin[t][0]], &b = V[tin[t][1]], &c = V[tin[t][2]];
-      Box3d tb;
-      tb.add(a); tb.add(b); tb.add(c);
-      const double ext_rel = tb.diagonal() / cs;
-      std::uint32_t x0, x1, y0, y1, z0, z1;
-      cell_range(tb.lo.x, tb.hi.x, T.root_lo.x, ext_rel, &x0, &x1);
-      cell_range(tb.lo.y, tb.hi.y, T.root_lo.y, ext_rel, &y0, &y1);
-      cell_range(tb.lo.z, tb.hi.z, T.root_lo.z, ext_rel, &z0, &z1);
-      for (std::uint32_t z = z0; z <= z1; ++z)
-        for (std::uint32_t y = y0; y <= y1; ++y)
-          for (std::uint32_t x = x0; x <= x1; ++x) {
-            const Vec3d lo{T.root_lo.x + double(x) * cs, T.root_lo.y + double(y) * cs, T.root_lo.z + double(z) * cs};
-            const Vec3d hi{T.root_lo.x + double(x + 1) * cs, T.root_lo.y + double(y + 1) * cs,
-                           T.root_lo.z + double(z + 1) * cs};
-            const bool single = x0 == x1 && y0 == y1 && z0 == z1;
-            if (single || tri_box_overlap(lo, hi, a, b, c)) out.push_back({morton_encode(x, y, z), std::uint32_t(t)});
-          }
+    auto distribute = [&](std::size_t t, std::vector<Pair>& out, std::vector<std::uint64_t>& ms) {
+      ms.clear();
+      distribute_triangle(ctx, V[tin[t][0]], V[tin[t][1]], V[tin[t][2]], ms);
+      for (std::uint64_t m : ms) out.push_back({m, std::uint32_t(t)});
     };
     if (threads <= 1) {
       pairs.reserve(nt * 2);
-      for (std::size_t t = 0; t < nt; ++t) distribute(t, pairs);
+      std::vector<std::uint64_t> ms;
+      for (std::size_t t = 0; t < nt; ++t) distribute(t, pairs, ms);
       std::sort(pairs.begin(), pairs.end());
     } else {
       tbb::enumerable_thread_specific<std::vector<Pair>> local;
+      tbb::enumerable_thread_specific<std::vector<std::uint64_t>> local_ms;
       tbb::task_arena arena(threads);
       arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
           auto& out = local.local();
-          for (std::size_t t = r.begin(); t != r.end(); ++t) distribute(t, out);
+          auto& ms = local_ms.local();
+          for (std::size_t t = r.begin(); t != r.end(); ++t) distribute(t, out, ms);
         });
         std::size_t total = 0;
         for (auto& v : local) total += v.size();
@@ -401,169 +897,26 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
   // ---- 4. leaves ----
   t0 = Clock::now();
   std::vector<NodeTmp> tmp(N);
+  std::vector<LeafHalves> halves(nleaves);
   T.tris.resize(pairs.size());
-  const double cos_cluster = std::cos(prm.cluster_angle * M_PI / 180.0);
-  const int max_planes = std::max(0, prm.max_planes);
-  const Vec3d rc = T.root_centre;
-  const double plane_margin = 1e-9 * T.root_size;
-
-  // Makes a float plane (root frame) from a unit direction and the support of `pts` (world).
-  auto make_plane = [&](const Vec3d& n, const std::vector<Vec3d>& pts, Plane* out) {
-    const Vec3d nd = round_to_float(n);
-    double s = -std::numeric_limits<double>::infinity();
-    for (const Vec3d& v : pts) s = std::max(s, dot(nd, v - rc));
-    out->n[0] = float(nd.x); out->n[1] = float(nd.y); out->n[2] = float(nd.z);
-    out->d = round_up(s + plane_margin);
-  };
-  auto plane_world = [&](const Plane& p, Vec3d* n, double* d) {
-    *n = Vec3d(double(p.n[0]), double(p.n[1]), double(p.n[2]));
-    *d = double(p.d) + dot(*n, rc);
-  };
-
   par_for(threads, nleaves, [&](std::size_t li) {
     const std::uint32_t ni = leaf_node[li];
     Node& nd = T.nodes[ni];
     Leaf& lf = T.leaves[li];
-    Vec3d lo, hi;
-    T.cell_box(nd.code, &lo, &hi);
-    const Vec3d cc = (lo + hi) * 0.5;
-    const Vec3d cfd = round_to_float(cc);
-    lf.centre[0] = float(cfd.x); lf.centre[1] = float(cfd.y); lf.centre[2] = float(cfd.z);
-    lf.tri_begin = leaf_begin[li];
-    lf.tri_count = leaf_begin[li + 1] - leaf_begin[li];
-    lf.pad = 0;
-    double R = 0.5 * cs * std::sqrt(3.0) + norm(cc - cfd);
-    std::vector<Vec3d> geo;  // vertices of triangle ∩ cell polygons
-    struct Cand { Vec3d n; double area; std::uint32_t t; };
-    std::vector<Cand> cands;
-    for (std::uint32_t k = lf.tri_begin; k < lf.tri_begin + lf.tri_count; ++k) {
+    const std::uint32_t b = leaf_begin[li], e = leaf_begin[li + 1];
+    std::vector<std::uint32_t> tri(e - b);
+    std::vector<float> xyz(9 * std::size_t(e - b));
+    for (std::uint32_t k = b; k < e; ++k) {
       const std::uint32_t t = pairs[k].t;
-      LeafTri& r = T.tris[k];
-      const Vec3d &a = V[tin[t][0]], &b = V[tin[t][1]], &c = V[tin[t][2]];
-      for (int q = 0; q < 3; ++q) { r.a[q] = float(a[q]); r.b[q] = float(b[q]); r.c[q] = float(c[q]); }
-      r.tri = t;
-      r.flags = 0;
-      r.pad = 0;
-      const bool degen = collinear_exact(a, b, c);
-      const Vec3d nrm = cross(b - a, c - a);
-      const double len = norm(nrm);
-      if (degen) r.flags |= kDegenerate;
-      if (!degen && len >= 1e-6 * norm(b - a) * norm(c - a)) {
-        const Vec3d n = nrm / len;
-        const Vec3d nf = round_to_float(n);
-        r.n[0] = float(nf.x); r.n[1] = float(nf.y); r.n[2] = float(nf.z);
-        r.d = float(dot(nf, a - cfd));
-        cands.push_back({n, 0.5 * len, t});
-      } else {
-        r.n[0] = r.n[1] = r.n[2] = 0.f;
-        r.d = 0.f;
-      }
-      R = std::max({R, norm(a - cfd), norm(b - cfd), norm(c - cfd)});
-      clip_triangle_to_box(lo, hi, a, b, c, geo);
+      tri[k - b] = t;
+      for (int q = 0; q < 3; ++q)
+        for (int ax = 0; ax < 3; ++ax) xyz[9 * std::size_t(k - b) + 3 * q + ax] = float(V[tin[t][q]][ax]);
     }
-    lf.eps = round_up(2e-6 * R);
-    if (geo.empty()) {  // touches only within the margin: bound by the cell's own centre
-      geo.push_back(cc);
-    }
-    // Bounding planes: greedy angular cover of the face normals (largest faces first), both
-    // orientations of each representative, offset to the support of the clipped geometry.
-    std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) {
-      return x.area > y.area || (x.area == y.area && x.t < y.t);
-    });
-    std::vector<Vec3d> reps;
-    for (const Cand& cd : cands) {
-      if (int(reps.size()) * 2 >= max_planes) break;
-      bool covered = false;
-      for (const Vec3d& r : reps)
-        if (std::fabs(dot(r, cd.n)) >= cos_cluster) { covered = true; break; }
-      if (!covered) reps.push_back(cd.n);
-    }
-    struct Scored { Plane p; double cut; };
-    std::vector<Scored> sc;
-    for (const Vec3d& r : reps)
-      for (double sgn : {1.0, -1.0}) {
-        Plane p;
-        make_plane(r * sgn, geo, &p);
-        Vec3d n; double d;
-        plane_world(p, &n, &d);
-        const double cut = box_support(lo, hi, n) - d;
-        if (cut > 1e-4 * cs) sc.push_back({p, cut});
-      }
-    std::stable_sort(sc.begin(), sc.end(), [](const Scored& x, const Scored& y) { return x.cut > y.cut; });
-    if (int(sc.size()) > max_planes) sc.resize(std::size_t(max_planes));
-    NodeTmp& tm = tmp[ni];
-    Polytope poly = Polytope::box(lo, hi);
-    for (auto& s : sc) {
-      tm.planes.push_back(s.p);
-      Vec3d n; double d;
-      plane_world(s.p, &n, &d);
-      poly.clip(n, d);
-    }
-    tm.poly = poly.vertices();
-    if (tm.poly.empty()) {  // numerically flat: fall back to the box corners (conservative)
-      tm.poly = Polytope::box(lo, hi).vertices();
-    }
-    tm.volume = poly.volume();
-    tm.box_volume = cs * cs * cs;
-
-    // Configuration, on the exact face planes and the triangles' vertices.
-    const LeafTri* blk = &T.tris[lf.tri_begin];
-    std::vector<Vec3d> verts;
-    for (std::uint32_t k = 0; k < lf.tri_count; ++k)
-      if (!(blk[k].flags & kDegenerate))
-        for (const float* f : {blk[k].a, blk[k].b, blk[k].c}) verts.push_back(to_d(f));
-    std::sort(verts.begin(), verts.end(), [](const Vec3d& x, const Vec3d& y) {
-      return x.x < y.x || (x.x == y.x && (x.y < y.y || (x.y == y.y && x.z < y.z)));
-    });
-    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    bool convex = !verts.empty(), concave = !verts.empty();
-    for (std::uint32_t k = 0; k < lf.tri_count && (convex || concave); ++k) {
-      if (blk[k].flags & kDegenerate) continue;
-      const Vec3d a = to_d(blk[k].a), b = to_d(blk[k].b), c = to_d(blk[k].c);
-      for (const Vec3d& v : verts) {
-        const int o = orient3d(a, b, c, v);
-        if (o > 0) convex = false;
-        if (o < 0) concave = false;
-        if (!convex && !concave) break;
-      }
-    }
-    nd.config = convex ? LeafConfig::convex : concave ? LeafConfig::concave : LeafConfig::special;
-
-    // Reference point: strictly inside the cell, off every face plane; for convex (concave)
-    // leaves, preferably on the inner (outer) side of all of them, so that the common query needs
-    // no edge test.
-    const double half = 0.5 * cs;
-    int best_score = -1;
-    std::vector<std::uint8_t> sides(lf.tri_count), best_sides;
-    Vec3d best_ref = cc;
-    for (const Vec3d& off : ref_offsets()) {
-      const Vec3d r0 = cc + off * half;
-      const Vec3d r = round_to_float(r0);
-      if (!(r.x > lo.x && r.x < hi.x && r.y > lo.y && r.y < hi.y && r.z > lo.z && r.z < hi.z)) continue;
-      bool ok = true;
-      int inner = 0, outer = 0;
-      for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
-        if (blk[k].flags & kDegenerate) { sides[k] = 0; continue; }
-        const int o = orient3d(to_d(blk[k].a), to_d(blk[k].b), to_d(blk[k].c), r);
-        if (o == 0) { ok = false; break; }
-        sides[k] = o > 0;
-        (o > 0 ? outer : inner)++;
-      }
-      if (!ok) continue;
-      const int score = nd.config == LeafConfig::convex ? inner : nd.config == LeafConfig::concave ? outer : 0;
-      if (score > best_score) {
-        best_score = score;
-        best_ref = r;
-        best_sides = sides;
-        if (nd.config == LeafConfig::special || score == int(lf.tri_count)) break;
-      }
-    }
-    lf.ref_valid = best_score >= 0;
-    lf.ref[0] = float(best_ref.x); lf.ref[1] = float(best_ref.y); lf.ref[2] = float(best_ref.z);
-    lf.ref_winding = 0;
-    if (lf.ref_valid)
-      for (std::uint32_t k = 0; k < lf.tri_count; ++k)
-        if (best_sides[k]) T.tris[lf.tri_begin + k].flags |= kRefPositive;
+    const std::uint32_t next = nd.next, index = nd.index;
+    build_leaf(ctx, nd.code, e - b, tri.data(), xyz.data(), &nd, &lf, &T.tris[b], &tmp[ni], &halves[li]);
+    nd.next = next;
+    nd.index = index;
+    lf.tri_begin = b;
   });
   S.seconds_leaves = since(t0);
   report(0.6);
@@ -579,52 +932,13 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
       par_for(threads, list.size(), [&](std::size_t q) {
         const std::uint32_t ni = list[q];
         const Node& nd = T.nodes[ni];
-        Vec3d lo, hi;
-        T.cell_box(nd.code, &lo, &hi);
-        const double csl = hi.x - lo.x;
-        std::vector<Vec3d> pts;
-        std::vector<Vec3d> cand;
+        NodeTmp* ch[8];
         for (int o = 0; o < 8; ++o) {
           const std::uint32_t ci = T.children[nd.index + o];
           const NodeKind k = T.nodes[ci].kind;
-          if (k != NodeKind::inner && k != NodeKind::leaf) continue;
-          NodeTmp& ct = tmp[ci];
-          pts.insert(pts.end(), ct.poly.begin(), ct.poly.end());
-          for (const Plane& p : ct.planes) cand.push_back({double(p.n[0]), double(p.n[1]), double(p.n[2])});
-          std::vector<Vec3d>().swap(ct.poly);  // children's volumes are no longer needed
+          ch[o] = (k == NodeKind::inner || k == NodeKind::leaf) ? &tmp[ci] : nullptr;
         }
-        struct Scored { Plane p; double cut; Vec3d n; };
-        std::vector<Scored> sc;
-        for (const Vec3d& n : cand) {
-          Plane p;
-          make_plane(n, pts, &p);
-          Vec3d nw; double d;
-          plane_world(p, &nw, &d);
-          const double cut = box_support(lo, hi, nw) - d;
-          if (cut > 1e-4 * csl) sc.push_back({p, cut, nw});
-        }
-        std::stable_sort(sc.begin(), sc.end(), [](const Scored& x, const Scored& y) { return x.cut > y.cut; });
-        NodeTmp& tm = tmp[ni];
-        std::vector<Vec3d> chosen;
-        for (const Scored& s : sc) {
-          if (int(tm.planes.size()) >= max_planes) break;
-          bool close = false;
-          for (const Vec3d& c : chosen)
-            if (dot(c, s.n) >= cos_cluster) { close = true; break; }
-          if (close) continue;
-          chosen.push_back(s.n);
-          tm.planes.push_back(s.p);
-        }
-        Polytope poly = Polytope::box(lo, hi);
-        for (const Plane& p : tm.planes) {
-          Vec3d n; double d;
-          plane_world(p, &n, &d);
-          poly.clip(n, d);
-        }
-        tm.poly = poly.vertices();
-        if (tm.poly.empty()) tm.poly = Polytope::box(lo, hi).vertices();
-        tm.volume = poly.volume();
-        tm.box_volume = csl * csl * csl;
+        build_inner(ctx, nd.code, ch, &tmp[ni]);
       });
     }
   }
@@ -652,133 +966,40 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
   // ---- 6. colouring ----
   t0 = Clock::now();
   {
-    const std::uint32_t OUT = std::uint32_t(N);
-    UnionFind uf(N + 1);
-    // Empty nodes touching the root's boundary are outside: the root is larger than the model's
-    // bounding box on every side.
+    Skeleton sk;
+    sk.leaf_level = L;
+    sk.code.resize(N);
+    sk.kind.resize(N);
+    sk.index.resize(N);
     for (std::size_t i = 0; i < N; ++i) {
-      const Node& nd = T.nodes[i];
-      if (nd.kind != NodeKind::white) continue;
-      std::uint32_t x, y, z;
-      octcode_cell(nd.code, &x, &y, &z);
-      const std::uint32_t last = (1u << octcode_level(nd.code)) - 1;
-      if (x == 0 || y == 0 || z == 0 || x == last || y == last || z == last) uf.unite(std::uint32_t(i), OUT, 0);
+      sk.code[i] = T.nodes[i].code;
+      sk.kind[i] = T.nodes[i].kind;
+      sk.index[i] = T.nodes[i].index;
     }
-    std::vector<std::uint32_t> stamp(nt, UINT32_MAX);
-    std::vector<const LeafTri*> list;
+    sk.children = T.children;
+    sk.leaf_node = leaf_node;
+    sk.leaf_ref.resize(nleaves);
+    sk.leaf_ref_valid.resize(nleaves);
     for (std::size_t li = 0; li < nleaves; ++li) {
-      const Leaf& A = T.leaves[li];
-      if (!A.ref_valid) continue;
-      const std::uint32_t ni = leaf_node[li];
-      std::uint32_t c[3];
-      octcode_cell(T.nodes[ni].code, &c[0], &c[1], &c[2]);
-      Vec3d lo, hi;
-      T.cell_box(T.nodes[ni].code, &lo, &hi);
-      const Vec3d ra = to_d(A.ref);
-      for (int dir = 0; dir < 6; ++dir) {
-        const int axis = dir >> 1;
-        const bool pos = dir & 1;
-        std::uint32_t nb[3] = {c[0], c[1], c[2]};
-        std::uint32_t target;
-        bool to_leaf = false;
-        if ((!pos && c[axis] == 0) || (pos && c[axis] == G - 1)) {
-          target = OUT;
-        } else {
-          nb[axis] = pos ? c[axis] + 1 : c[axis] - 1;
-          target = T.locate_cell(nb[0], nb[1], nb[2]);
-          to_leaf = T.nodes[target].kind == NodeKind::leaf;
-          if (to_leaf && !T.leaves[T.nodes[target].index].ref_valid) continue;
-        }
-        int pa, pb;
-        if (uf.find(ni, &pa) == uf.find(target, &pb)) continue;
-        list.clear();
-        for (std::uint32_t k = 0; k < A.tri_count; ++k) {
-          list.push_back(&T.tris[A.tri_begin + k]);
-          stamp[T.tris[A.tri_begin + k].tri] = std::uint32_t(li);
-        }
-        Vec3d q;
-        if (to_leaf) {
-          const Leaf& B = T.leaves[T.nodes[target].index];
-          for (std::uint32_t k = 0; k < B.tri_count; ++k)
-            if (stamp[T.tris[B.tri_begin + k].tri] != li) list.push_back(&T.tris[B.tri_begin + k]);
-          q = to_d(B.ref);
-        } else {
-          q = ra;
-          q[axis] = pos ? hi[axis] : lo[axis];
-        }
-        int delta;
-        if (!segment_winding(ra, q, list.data(), list.size(), &delta)) { ++S.degenerate_edges; continue; }
-        uf.unite(ni, target, delta);
-      }
+      for (int k = 0; k < 3; ++k) sk.leaf_ref[li][k] = T.leaves[li].ref[k];
+      sk.leaf_ref_valid[li] = T.leaves[li].ref_valid;
     }
-    // Empty nodes not yet joined: probe the cells just across their faces for joined empty nodes.
-    for (bool changed = true; changed;) {
-      changed = false;
-      for (std::size_t i = 0; i < N; ++i) {
-        const Node& nd = T.nodes[i];
-        if (nd.kind != NodeKind::white || uf.touched[i]) continue;
-        std::uint32_t c[3];
-        octcode_cell(nd.code, &c[0], &c[1], &c[2]);
-        const int l = octcode_level(nd.code);
-        const std::uint32_t span = 1u << (L - l);
-        bool done = false;
-        for (int dir = 0; dir < 6 && !done; ++dir) {
-          const int axis = dir >> 1;
-          const bool pos = dir & 1;
-          for (int qd = 0; qd < 4 && !done; ++qd) {
-            std::uint32_t p[3];
-            for (int k = 0; k < 3; ++k) p[k] = c[k] * span;
-            const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-            p[a1] += (qd & 1) ? (3 * span) / 4 : span / 4;
-            p[a2] += (qd & 2) ? (3 * span) / 4 : span / 4;
-            if (pos) p[axis] += span; else if (p[axis] == 0) continue; else p[axis] -= 1;
-            if (p[axis] >= G) continue;
-            const std::uint32_t k = T.locate_cell(p[0], p[1], p[2]);
-            if (k != i && T.nodes[k].kind == NodeKind::white && uf.touched[k]) {
-              uf.unite(std::uint32_t(i), k, 0);
-              done = changed = true;
-            }
-          }
-        }
+    sk.leaf_halves = std::move(halves);
+    auto winding_at = [&](const std::vector<Vec3d>& pts) {
+      std::vector<int> out;
+      for (const Vec3d& p : pts) {
+        double w = 0;
+        for (const auto& t : tin) w += bvhbench::triangle_winding(p, V[t[0]], V[t[1]], V[t[2]]);
+        out.push_back(int(std::lround(w)));
       }
-    }
-    // Windings. OUT has w = 0. Components not joined to the outside (only when every edge of a
-    // region was degenerate) take the generalized winding number of one of their points.
-    int pout;
-    const std::uint32_t rout = uf.find(OUT, &pout);
-    std::vector<int> comp_w(N + 1, 0);
-    std::vector<std::uint8_t> comp_known(N + 1, 0);
-    comp_w[rout] = -pout;  // w(root) = w(OUT) - (w(OUT) - w(root))
-    comp_known[rout] = 1;
-    auto winding_at = [&](const Vec3d& p) {
-      double w = 0;
-      for (const auto& t : tin) w += bvhbench::triangle_winding(p, V[t[0]], V[t[1]], V[t[2]]);
-      return int(std::lround(w));
+      return out;
     };
-    auto winding_of = [&](std::uint32_t i, const Vec3d& pt) {
-      int pot;
-      const std::uint32_t r = uf.find(i, &pot);
-      if (!comp_known[r]) {
-        ++S.colour_fallbacks;
-        comp_w[r] = winding_at(pt) - pot;
-        comp_known[r] = 1;
-      }
-      return comp_w[r] + pot;
-    };
-    for (std::size_t i = 0; i < N; ++i) {
-      Node& nd = T.nodes[i];
-      if (nd.kind == NodeKind::white) {
-        Vec3d lo, hi;
-        T.cell_box(nd.code, &lo, &hi);
-        nd.kind = winding_of(std::uint32_t(i), (lo + hi) * 0.5) >= 1 ? NodeKind::black : NodeKind::white;
-      } else if (nd.kind == NodeKind::leaf) {
-        Leaf& lf = T.leaves[nd.index];
-        if (lf.ref_valid)
-          lf.ref_winding = std::int16_t(std::clamp(winding_of(std::uint32_t(i), to_d(lf.ref)), -32768, 32767));
-        else
-          ++S.invalid_refs;
-      }
-    }
+    const Colouring C = colour(F, sk, winding_at);
+    for (std::uint32_t i : C.black) T.nodes[i].kind = NodeKind::black;
+    for (std::size_t li = 0; li < nleaves; ++li) T.leaves[li].ref_winding = C.ref_winding[li];
+    S.colour_fallbacks = C.colour_fallbacks;
+    S.degenerate_edges = C.degenerate_edges;
+    S.invalid_refs = C.invalid_refs;
   }
   S.seconds_colour = since(t0);
 
@@ -823,6 +1044,7 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
     T.closed = closed;
   }
   S.build_seconds = since(t_start);
+  // (Hook: the tree is complete here.)
   report(1.0);
   return T;
 }

@@ -22,6 +22,7 @@
 
 #include "ebp_adapter.hpp"
 #include "commands.hpp"
+#include "ebp_extbuild.hpp"
 #include "ebp_ooc.hpp"
 #include "ebp_store.hpp"
 #include "errors.hpp"
@@ -173,6 +174,7 @@ void add_build_command(CLI::App& ebp_cmd) {
     int threads = 2;
     int page_kb = 16;
     bool json = false;
+    bool in_memory = false;
     int fail_after_pages = -1;  // test hook
   };
   auto o = std::make_shared<Opts>();
@@ -188,6 +190,8 @@ void add_build_command(CLI::App& ebp_cmd) {
   cmd->add_option("--page-kb", o->page_kb, "Target page size in KiB (subtrees packed up to it)")->check(CLI::Range(4, 1 << 20));
   cmd->add_option("--fail-after-pages", o->fail_after_pages, "Testing: fail after writing N pages")->group("");
   cmd->add_flag("--json", o->json, "Machine-readable summary");
+  cmd->add_flag("--in-memory", o->in_memory,
+                "Load the mesh and build the tree in memory, then write it (the old path: peak RSS follows the model)");
   cmd->callback([o] {
     const auto t0 = std::chrono::steady_clock::now();
     SignalGuard signals;
@@ -207,13 +211,104 @@ void add_build_command(CLI::App& ebp_cmd) {
     if (!std::filesystem::is_directory(out.parent_path()))
       throw file_error(o->out, "the output directory does not exist");
     TempDir tmp(o->tmp.empty() ? out.parent_path().string() : o->tmp);
+    const double budget = o->budget_mb * 1048576.0;
+    if (!o->in_memory) {
+      // External-memory build (OUT_OF_CORE.md): the mesh is streamed, the (cell, triangle)
+      // records are sorted in runs under tmp and merged, pages are written as subtrees complete.
+      std::unique_ptr<ebp::TriangleSource> src = ebp::open_mesh_source(o->mesh);
+      SignalGuard::check();
+      ebp::ExtBuildOptions eo;
+      eo.params = bp;
+      eo.memory_budget = std::size_t(budget);
+      eo.tmp_dir = tmp.path.string();
+      eo.page_target = std::size_t(o->page_kb) * 1024;
+      const std::string mesh_path = o->mesh;
+      const bool streaming = src->streaming();
+      eo.info_json = [&](const ebp::ExtBuildReport& r) {
+        nlohmann::json info;
+        const ebp::Stats& s = r.stats;
+        info["mesh"] = mesh_path;
+        info["mesh_sha256"] = src->sha256();
+        info["triangles"] = s.triangles;
+        info["params"] = p.values();
+        info["threads"] = o->threads;
+        info["leaf_level"] = s.leaf_level;
+        info["leaf_size"] = s.leaf_size;
+        info["average_edge"] = s.average_edge;
+        info["nodes_per_level"] = s.nodes_per_level;
+        info["leaf_configurations"] = {{"convex", s.convex}, {"concave", s.concave}, {"special", s.special}};
+        info["max_refs_per_leaf"] = s.max_refs_per_leaf;
+        info["build_seconds"] = s.build_seconds;
+        info["build"] = {{"kind", "external"}, {"memory_budget_bytes", budget}, {"runs", r.runs},
+                         {"spill_bytes", r.spill_bytes}, {"records", r.records}, {"streamed_mesh", streaming},
+                         {"colour_fallbacks", s.colour_fallbacks}, {"degenerate_edges", s.degenerate_edges}};
+        return info.dump();
+      };
+      Progress prog("building " + o->out + " (external)", 1.0, !o->json);
+      eo.progress = [&](const char*, double f) { prog.update(f); };
+      eo.check = [] { SignalGuard::check(); };
+      const int fail_after = o->fail_after_pages;
+      eo.before_page = [fail_after](std::uint32_t id) {
+        if (fail_after >= 0 && id >= std::uint32_t(fail_after)) throw std::runtime_error("simulated failure (--fail-after-pages)");
+      };
+      ebp::ExtBuildReport rep;
+      try {
+        rep = ebp::build_store_external(*src, out.string(), eo);
+      } catch (const std::invalid_argument& e) {
+        throw file_error(o->mesh, std::string(e.what()) + "; nothing written (no " + o->out + ", temporary files removed)");
+      } catch (const InputError&) {
+        throw;
+      } catch (const std::exception& e) {
+        if (g_signal) throw;
+        throw std::runtime_error(std::string(e.what()) + "; nothing written (no " + o->out + ", temporary files removed)");
+      }
+      prog.finish();
+      const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const std::uint64_t peak = peak_rss_bytes();
+      const std::uint64_t ntri = rep.stats.triangles;
+      nlohmann::json j{{"out", out.string()},
+                       {"triangles", ntri},
+                       {"pages", rep.pages},
+                       {"bytes", rep.file_bytes},
+                       {"build_seconds", rep.seconds_total},
+                       {"total_seconds", total_s},
+                       {"triangles_per_second", double(ntri) / total_s},
+                       {"peak_rss_bytes", peak},
+                       {"memory_budget_bytes", budget},
+                       {"within_budget", double(peak) <= budget},
+                       {"runs", rep.runs},
+                       {"spill_bytes", rep.spill_bytes},
+                       {"records", rep.records},
+                       {"skeleton_bytes", rep.skeleton_bytes},
+                       {"min_budget_bytes", rep.min_budget_bytes},
+                       {"streamed_mesh", streaming},
+                       {"seconds", {{"frame", rep.seconds_frame}, {"distribute", rep.seconds_distribute},
+                                    {"merge_build", rep.seconds_merge_build}, {"colour", rep.seconds_colour}}}};
+      if (o->json) {
+        std::cout << j.dump(2) << "\n";
+      } else {
+        std::printf("wrote %s: %lu triangles, %lu pages, %.1f MiB in %.1f s (%.0f triangles/s, %d threads)\n",
+                    out.c_str(), (unsigned long)ntri, (unsigned long)rep.pages, double(rep.file_bytes) / 1048576.0,
+                    total_s, double(ntri) / total_s, o->threads);
+        std::printf("external build: %lu sorted run(s), %.1f MiB spilled; frame %.1f s, distribution %.1f s, "
+                    "merge+build %.1f s, colouring %.1f s\n",
+                    (unsigned long)rep.runs, double(rep.spill_bytes) / 1048576.0, rep.seconds_frame,
+                    rep.seconds_distribute, rep.seconds_merge_build, rep.seconds_colour);
+        std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
+                    double(peak) <= budget ? "" : " (EXCEEDED, see OUT_OF_CORE.md: what is bounded)");
+        if (double(rep.min_budget_bytes) > budget)
+          std::printf("note: this model needs a budget of at least %.0f MiB (float vertices %.0f MiB, node skeleton "
+                      "and top tree, fixed reserve)\n",
+                      double(rep.min_budget_bytes) / 1048576.0, double(src->resident_bytes()) / 1048576.0);
+      }
+      return;
+    }
 
     Progress load("loading " + o->mesh, 1.0, !o->json);
     Mesh mesh = load_mesh(o->mesh);
     load.finish();
     SignalGuard::check();
     const std::size_t ntri = mesh.num_triangles();
-    const double budget = o->budget_mb * 1048576.0;
     ebp::Octree tree;
     {
       Progress prog("building ebp_octree", 1.0, !o->json);
