@@ -18,7 +18,7 @@ namespace ebp {
 
 namespace {
 inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
-constexpr std::size_t kLeafBoxSlots = 16;  // Query::leaf_boxes_
+constexpr std::size_t kLeafBoxSlots = 64;  // Query::leaf_boxes_
 /// The next float towards -inf (dir < 0) or +inf (dir > 0) of a finite float.
 inline float float_step(float f, int dir) {
   if (f == 0.0f) return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
@@ -244,31 +244,62 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 }  // namespace
 
 // The bounding boxes of a leaf's triangles (float, exact: min/max of the float coordinates),
-// degenerate triangles as empty boxes; a small direct-mapped cache.
+// grouped by the octant of the leaf cell that holds their box centre, with each group's box; a
+// small direct-mapped cache. Degenerate triangles are left out (no role in crossings).
 const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
   LeafBoxes& e = leaf_boxes_[li % kLeafBoxSlots];
   if (e.leaf == li) return e;
   const Leaf& lf = t_.leaves[li];
-  const std::uint32_t n = lf.tri_count, n4 = (n + 3) & ~3u;
+  const std::uint32_t n = lf.tri_count;
+  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
+  std::uint32_t count[8] = {};
+  tmp_oct_.resize(n);
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const LeafTri& t = blk[k];
+    if (t.flags & kDegenerate) { tmp_oct_[k] = 8; continue; }
+    std::uint8_t o = 0;
+    for (int a = 0; a < 3; ++a)
+      if (std::min({t.a[a], t.b[a], t.c[a]}) + std::max({t.a[a], t.b[a], t.c[a]}) > 2.0f * lf.centre[a]) o |= std::uint8_t(1 << a);
+    tmp_oct_[k] = o;
+    ++count[o];
+  }
+  std::uint32_t fill[8];
+  e.group[0] = 0;
+  for (int g = 0; g < 8; ++g) {
+    fill[g] = e.group[g];
+    e.group[g + 1] = e.group[g] + ((count[g] + 3) & ~3u);
+  }
+  const std::uint32_t n4 = e.group[8];
   e.leaf = li;
   e.n4 = n4;
   e.b.resize(std::size_t(6) * n4);
+  e.k.resize(n4);  // (a padding slot's k is never read: its box is empty)
   float* b = e.b.data();
-  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
-  for (std::uint32_t k = 0; k < n4; ++k) {
-    if (k >= n || (blk[k].flags & kDegenerate)) {
-      for (int a = 0; a < 3; ++a) {
-        b[a * n4 + k] = std::numeric_limits<float>::infinity();
-        b[(3 + a) * n4 + k] = -std::numeric_limits<float>::infinity();
-      }
-      continue;
+  for (int a = 0; a < 3; ++a)
+    for (int g = 0; g < 8; ++g) {
+      e.glo[a][g] = std::numeric_limits<float>::infinity();
+      e.ghi[a][g] = -std::numeric_limits<float>::infinity();
     }
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint8_t g = tmp_oct_[k];
+    if (g == 8) continue;
     const LeafTri& t = blk[k];
+    const std::uint32_t j = fill[g]++;
+    e.k[j] = k;
     for (int a = 0; a < 3; ++a) {
-      b[a * n4 + k] = std::min({t.a[a], t.b[a], t.c[a]});
-      b[(3 + a) * n4 + k] = std::max({t.a[a], t.b[a], t.c[a]});
+      const float lo = std::min({t.a[a], t.b[a], t.c[a]}), hi = std::max({t.a[a], t.b[a], t.c[a]});
+      b[a * n4 + j] = lo;
+      b[(3 + a) * n4 + j] = hi;
+      e.glo[a][g] = std::min(e.glo[a][g], lo);
+      e.ghi[a][g] = std::max(e.ghi[a][g], hi);
     }
   }
+  for (int g = 0; g < 8; ++g)
+    for (std::uint32_t j = fill[g]; j < e.group[g + 1]; ++j)  // padding: empty boxes
+      for (int a = 0; a < 3; ++a) {
+        b[a * n4 + j] = std::numeric_limits<float>::infinity();
+        b[(3 + a) * n4 + j] = -std::numeric_limits<float>::infinity();
+      }
   return e;
 }
 
@@ -346,28 +377,33 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
         const std::uint32_t base = t_.leaves[nd.index].tri_begin, n4 = lb.n4;
         const float* lx = lb.b.data();
         const float *ly = lx + n4, *lz = ly + n4, *hx = lz + n4, *hy = hx + n4, *hz = hy + n4;
+        for (int g = 0; g < 8; ++g) {
+          if (lb.ghi[0][g] < f0[0] || lb.glo[0][g] > f1[0] || lb.ghi[1][g] < f0[1] || lb.glo[1][g] > f1[1] ||
+              lb.ghi[2][g] < f0[2] || lb.glo[2][g] > f1[2])
+            continue;  // (an empty group's box is empty)
 #if defined(__SSE2__)
-        const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
-        const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
-        for (std::uint32_t j = 0; j < n4; j += 4) {
-          __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hx + j), ax), _mm_cmple_ps(_mm_loadu_ps(lx + j), bx));
-          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hy + j), ay), _mm_cmple_ps(_mm_loadu_ps(ly + j), by)));
-          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hz + j), az), _mm_cmple_ps(_mm_loadu_ps(lz + j), bz)));
-          for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
-            const int r = test(base + j + unsigned(__builtin_ctz(bits)));
+          const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
+          const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; j += 4) {
+            __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hx + j), ax), _mm_cmple_ps(_mm_loadu_ps(lx + j), bx));
+            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hy + j), ay), _mm_cmple_ps(_mm_loadu_ps(ly + j), by)));
+            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hz + j), az), _mm_cmple_ps(_mm_loadu_ps(lz + j), bz)));
+            for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
+              const int r = test(base + lb.k[j + unsigned(__builtin_ctz(bits))]);
+              if (r < 0) return false;
+              if (r == 0) { *wout = 1; return true; }
+            }
+          }
+#else
+          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; ++j) {
+            if (hx[j] < f0[0] || lx[j] > f1[0] || hy[j] < f0[1] || ly[j] > f1[1] || hz[j] < f0[2] || lz[j] > f1[2])
+              continue;
+            const int r = test(base + lb.k[j]);
             if (r < 0) return false;
             if (r == 0) { *wout = 1; return true; }
           }
-        }
-#else
-        for (std::uint32_t j = 0; j < n4; ++j) {
-          if (hx[j] < f0[0] || lx[j] > f1[0] || hy[j] < f0[1] || ly[j] > f1[1] || hz[j] < f0[2] || lz[j] > f1[2])
-            continue;
-          const int r = test(base + j);
-          if (r < 0) return false;
-          if (r == 0) { *wout = 1; return true; }
-        }
 #endif
+        }
       }
   *wout = w;
   prev_p_ = p;
