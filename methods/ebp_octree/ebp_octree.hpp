@@ -190,7 +190,7 @@ class Query {
   Vec3d prev_p_;
   int prev_w_ = 0;
   std::vector<LeafBoxes> leaf_boxes_;  // direct-mapped by leaf index
-  std::vector<std::uint8_t> tmp_oct_;
+  std::vector<float> tmp_box_;
   // coherent state
   std::uint32_t last_node_ = UINT32_MAX;
   std::uint32_t last_cell_[3] = {0, 0, 0};

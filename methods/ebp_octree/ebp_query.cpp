@@ -253,14 +253,19 @@ const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
   const std::uint32_t n = lf.tri_count;
   const LeafTri* blk = t_.tris.data() + lf.tri_begin;
   std::uint32_t count[8] = {};
-  tmp_oct_.resize(n);
+  tmp_box_.resize(std::size_t(7) * n);  // lo x, y, z, hi x, y, z, octant (as float) per triangle
+  float* tb = tmp_box_.data();
   for (std::uint32_t k = 0; k < n; ++k) {
     const LeafTri& t = blk[k];
-    if (t.flags & kDegenerate) { tmp_oct_[k] = 8; continue; }
-    std::uint8_t o = 0;
-    for (int a = 0; a < 3; ++a)
-      if (std::min({t.a[a], t.b[a], t.c[a]}) + std::max({t.a[a], t.b[a], t.c[a]}) > 2.0f * lf.centre[a]) o |= std::uint8_t(1 << a);
-    tmp_oct_[k] = o;
+    float* r = tb + std::size_t(7) * k;
+    if (t.flags & kDegenerate) { r[6] = 8; continue; }
+    unsigned o = 0;
+    for (int a = 0; a < 3; ++a) {
+      r[a] = std::min({t.a[a], t.b[a], t.c[a]});
+      r[3 + a] = std::max({t.a[a], t.b[a], t.c[a]});
+      if (r[a] + r[3 + a] > 2.0f * lf.centre[a]) o |= 1u << a;
+    }
+    r[6] = float(o);
     ++count[o];
   }
   std::uint32_t fill[8];
@@ -281,17 +286,16 @@ const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
       e.ghi[a][g] = -std::numeric_limits<float>::infinity();
     }
   for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint8_t g = tmp_oct_[k];
-    if (g == 8) continue;
-    const LeafTri& t = blk[k];
+    const float* r = tb + std::size_t(7) * k;
+    if (r[6] == 8) continue;
+    const unsigned g = unsigned(r[6]);
     const std::uint32_t j = fill[g]++;
     e.k[j] = k;
     for (int a = 0; a < 3; ++a) {
-      const float lo = std::min({t.a[a], t.b[a], t.c[a]}), hi = std::max({t.a[a], t.b[a], t.c[a]});
-      b[a * n4 + j] = lo;
-      b[(3 + a) * n4 + j] = hi;
-      e.glo[a][g] = std::min(e.glo[a][g], lo);
-      e.ghi[a][g] = std::max(e.ghi[a][g], hi);
+      b[a * n4 + j] = r[a];
+      b[(3 + a) * n4 + j] = r[3 + a];
+      e.glo[a][g] = std::min(e.glo[a][g], r[a]);
+      e.ghi[a][g] = std::max(e.ghi[a][g], r[3 + a]);
     }
   }
   for (int g = 0; g < 8; ++g)
