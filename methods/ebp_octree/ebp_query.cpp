@@ -18,7 +18,7 @@ namespace ebp {
 
 namespace {
 inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
-constexpr std::size_t kLeafBoxSlots = 64;  // Query::leaf_boxes_
+constexpr std::size_t kLeafBoxSlots = 64;  // Query::leaf_boxes_ (at most)
 /// The next float towards -inf (dir < 0) or +inf (dir > 0) of a finite float.
 inline float float_step(float f, int dir) {
   if (f == 0.0f) return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
@@ -41,7 +41,11 @@ inline float float_up(double x) {
 
 Query::Query(const Octree& tree, bool coherent)
     : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0) {
-  if (coherent_ && t_.closed) leaf_boxes_.resize(kLeafBoxSlots);
+  if (coherent_ && t_.closed) {  // a power of two, no more than the leaves (an out-of-core page has few)
+    std::size_t slots = 1;
+    while (slots < kLeafBoxSlots && slots < t_.leaves.size()) slots *= 2;
+    leaf_boxes_.resize(slots);
+  }
 }
 
 void Query::reset_path() {
@@ -247,7 +251,7 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 // grouped by the octant of the leaf cell that holds their box centre, with each group's box; a
 // small direct-mapped cache. Degenerate triangles are left out (no role in crossings).
 const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
-  LeafBoxes& e = leaf_boxes_[li % kLeafBoxSlots];
+  LeafBoxes& e = leaf_boxes_[li & (leaf_boxes_.size() - 1)];
   if (e.leaf == li) return e;
   const Leaf& lf = t_.leaves[li];
   const std::uint32_t n = lf.tri_count;
