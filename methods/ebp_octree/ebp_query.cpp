@@ -385,13 +385,26 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
         const std::uint32_t base = t_.leaves[nd.index].tri_begin, n4 = lb.n4;
         const float* lx = lb.b.data();
         const float *ly = lx + n4, *lz = ly + n4, *hx = lz + n4, *hy = hx + n4, *hz = hy + n4;
-        for (int g = 0; g < 8; ++g) {
-          if (lb.ghi[0][g] < f0[0] || lb.glo[0][g] > f1[0] || lb.ghi[1][g] < f0[1] || lb.glo[1][g] > f1[1] ||
-              lb.ghi[2][g] < f0[2] || lb.glo[2][g] > f1[2])
-            continue;  // (an empty group's box is empty)
 #if defined(__SSE2__)
-          const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
-          const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+        const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
+        const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+        unsigned groups = 0;  // the groups whose box meets S (an empty group's box is empty)
+        for (int h = 0; h < 8; h += 4) {
+          __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[0] + h), ax), _mm_cmple_ps(_mm_loadu_ps(lb.glo[0] + h), bx));
+          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[1] + h), ay), _mm_cmple_ps(_mm_loadu_ps(lb.glo[1] + h), by)));
+          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[2] + h), az), _mm_cmple_ps(_mm_loadu_ps(lb.glo[2] + h), bz)));
+          groups |= unsigned(_mm_movemask_ps(m)) << h;
+        }
+#else
+        unsigned groups = 0;
+        for (int g = 0; g < 8; ++g)
+          if (!(lb.ghi[0][g] < f0[0] || lb.glo[0][g] > f1[0] || lb.ghi[1][g] < f0[1] || lb.glo[1][g] > f1[1] ||
+                lb.ghi[2][g] < f0[2] || lb.glo[2][g] > f1[2]))
+            groups |= 1u << g;
+#endif
+        for (; groups; groups &= groups - 1) {
+          const int g = __builtin_ctz(groups);
+#if defined(__SSE2__)
           for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; j += 4) {
             __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hx + j), ax), _mm_cmple_ps(_mm_loadu_ps(lx + j), bx));
             m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hy + j), ay), _mm_cmple_ps(_mm_loadu_ps(ly + j), by)));
