@@ -89,7 +89,7 @@ paper: build
 	$(PYTHON) datasets-scripts/make_datasets.py --preset paper
 	@for m in $(PAPER_MODELS); do \
 	  if [ ! -f data/paper/$$m.ebp ] || [ data/paper/$$m.ply -nt data/paper/$$m.ebp ]; then \
-	    $(BVHBENCH) ebp build --mesh data/paper/$$m.ply --out data/paper/$$m.ebp --memory-budget 8192 --threads 2 || exit 1; \
+	    $(BVHBENCH) ebp build --mesh data/paper/$$m.ply --out data/paper/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
 	  fi; \
 	done
 	$(BVHBENCH) suite suites/paper.yml --out results/paper --resume
