@@ -27,6 +27,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "ebp_octree.hpp"
+#include "leaf_blocks.hpp"
 #include "polytope.hpp"
 #include "predicates.hpp"
 #include "tri_box.hpp"
@@ -461,6 +462,7 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
       R = std::max({R, norm(a - cfd), norm(b - cfd), norm(c - cfd)});
       clip_triangle_to_box(lo, hi, a, b, c, geo);
     }
+    order_leaf_triangles(&T.tris[lf.tri_begin], lf.tri_count);  // spatial order (leaf_blocks.hpp)
     lf.eps = round_up(2e-6 * R);
     if (geo.empty()) {  // touches only within the margin: bound by the cell's own centre
       geo.push_back(cc);
@@ -822,6 +824,7 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
     }
     T.closed = closed;
   }
+  compute_leaf_blocks(T);  // derived boxes (leaf_blocks.hpp)
   S.build_seconds = since(t_start);
   report(1.0);
   return T;
