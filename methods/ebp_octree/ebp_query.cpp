@@ -455,15 +455,41 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   StackItem stack[8 * (kMaxLevel + 2)];
   int sp = 0;
   {
+    std::uint32_t start = s.node;
     Vec3d lo = t_.root_lo, hi;
     double size = t_.root_size;
     int level = 0;
-    if (s.node != 0) {
-      t_.cell_box(nodes[s.node].code, &lo, &hi);
-      level = octcode_level(nodes[s.node].code);
+    if (start != 0) {
+      t_.cell_box(nodes[start].code, &lo, &hi);
+      level = octcode_level(nodes[start].code);
       size = t_.cell_size(level);
     }
-    stack[sp++] = {lo, lower_bound(s.node, lo, size), s.node, level};
+    // With a finite best (a seed, or the bound passed in), the search narrows to the deepest
+    // node on p's path whose cell holds the ball (p, best + tol) strictly inside: all geometry
+    // outside that cell is strictly farther than the best, so nothing it could win is lost.
+    if (B.best < std::numeric_limits<double>::infinity()) {
+      const double r = B.best + tol;
+      auto holds = [&](const Vec3d& c, double sz) {
+        return p.x - c.x > r && p.y - c.y > r && p.z - c.z > r && c.x + sz - p.x > r && c.y + sz - p.y > r &&
+               c.z + sz - p.z > r;
+      };
+      if (holds(lo, size)) {
+        while (nodes[start].kind == NodeKind::inner) {
+          const double csz = t_.cell_size(level + 1);
+          const int o = (p.x >= lo.x + csz ? 1 : 0) | (p.y >= lo.y + csz ? 2 : 0) | (p.z >= lo.z + csz ? 4 : 0);
+          const Vec3d clo{lo.x + ((o & 1) ? csz : 0.0), lo.y + ((o & 2) ? csz : 0.0), lo.z + ((o & 4) ? csz : 0.0)};
+          const std::uint32_t ci = t_.children[nodes[start].index + std::uint32_t(o)];
+          const NodeKind ck = nodes[ci].kind;
+          if ((ck != NodeKind::inner && ck != NodeKind::leaf) || !holds(clo, csz)) break;
+          ++counters.nodes_visited;
+          start = ci;
+          lo = clo;
+          size = csz;
+          ++level;
+        }
+      }
+    }
+    stack[sp++] = {lo, lower_bound(start, lo, size), start, level};
   }
   while (sp > 0) {
     const StackItem it = stack[--sp];
