@@ -363,7 +363,12 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   // the best only decreases).
   const Leaf* leaves = t_.leaves.data();
   const BlockBox* blocks = t_.blocks.data();
-  auto scan_leaf = [&](std::uint32_t li) {
+  // hn: the leaf's most separating bounding plane at p (h = its lower bound of the distance, n
+  // its normal), or h <= 0 for none.
+  struct PlaneHint {
+    double h = 0, n[3] = {0, 0, 0};
+  };
+  auto scan_leaf = [&](std::uint32_t li, const PlaneHint& hn) {
     if (leaf_stamp_[li] == qid) return;
     leaf_stamp_[li] = qid;
     const Leaf& lf = leaves[li];
@@ -379,13 +384,39 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     std::pair<double, std::uint32_t>* ord = order_.data();
     std::uint32_t m = 0;
     counters.planes_tested += nb;
+    const double nn = hn.n[0] * hn.n[0] + hn.n[1] * hn.n[1] + hn.n[2] * hn.n[2];
     for (std::uint32_t j = 0; j < nb; ++j) {
-      const double d2 = box_d2(bb[j], p);
+      double d2 = box_d2(bb[j], p);
       if (d2 > lim2) continue;
+      if (hn.h > 0) {
+        // The leaf's plane and the block box's bounding sphere (as lower_bound does for nodes):
+        // a bound of the distance to the block's triangles within this leaf's cell, which is
+        // all this leaf stands for.
+        const BlockBox& x = bb[j];
+        const double ex = double(x.hi[0]) - double(x.lo[0]), ey = double(x.hi[1]) - double(x.lo[1]),
+                     ez = double(x.hi[2]) - double(x.lo[2]);
+        const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez) * (1.0 + 1e-12);
+        const double qx = p.x - 0.5 * (double(x.lo[0]) + double(x.hi[0])), qy = p.y - 0.5 * (double(x.lo[1]) + double(x.hi[1])),
+                     qz = p.z - 0.5 * (double(x.lo[2]) + double(x.hi[2]));
+        const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * hn.n[0] + qy * hn.n[1] + qz * hn.n[2];
+        const double tan2 = q2 - qn * qn / nn;
+        if (tan2 > rho * rho) {
+          const double tl = std::sqrt(tan2) - rho;
+          const double cb = std::sqrt(hn.h * hn.h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol);
+          if (cb > 0) d2 = std::max(d2, cb * cb);
+          if (d2 > lim2) continue;
+        }
+      }
       // insertion, ascending (distance, block): a deterministic order
       std::uint32_t i = m++;
       while (i > 0 && ord[i - 1].first > d2) { ord[i] = ord[i - 1]; --i; }
       ord[i] = {d2, j};
+    }
+    // The surviving blocks' triangles are usually cold (random points): ask for all of them now,
+    // so that the misses overlap instead of being paid one block after the other.
+    for (std::uint32_t i = 0; i < m && i < 4; ++i) {
+      const char* a = reinterpret_cast<const char*>(tris + lf.tri_begin + ord[i].second * kBlockTris);
+      for (std::uint32_t l = 0; l < kBlockTris; ++l) __builtin_prefetch(a + 64 * l);
     }
     for (std::uint32_t i = 0; i < m; ++i) {
       if (ord[i].first > lim2) break;
@@ -404,7 +435,30 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
         }
         if (far) continue;
         const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
-        if (double(std::fabs(sv)) - eps_p > B.best) continue;
+        const double h = double(std::fabs(sv)) - eps_p;
+        if (h > B.best) continue;
+        // Face plane and the vertices' bounding sphere together (as for nodes, see
+        // lower_bound): |p - y|^2 >= h^2 + (|tangential part of p - c| - rho)^2 for every y of
+        // the triangle. Far from a flat or gently curved patch, the face planes of all its
+        // triangles are at about the distance; this bound grows away from the foot of p.
+        if (h > 0) {
+          const double cx = (double(t.a[0]) + double(t.b[0]) + double(t.c[0])) * (1.0 / 3.0),
+                       cy = (double(t.a[1]) + double(t.b[1]) + double(t.c[1])) * (1.0 / 3.0),
+                       cz = (double(t.a[2]) + double(t.b[2]) + double(t.c[2])) * (1.0 / 3.0);
+          auto r2 = [&](const float* v) {
+            const double x = double(v[0]) - cx, y = double(v[1]) - cy, z = double(v[2]) - cz;
+            return x * x + y * y + z * z;
+          };
+          const double rho = std::sqrt(std::max({r2(t.a), r2(t.b), r2(t.c)})) * (1.0 + 1e-12);
+          const double nx = double(t.n[0]), ny = double(t.n[1]), nz = double(t.n[2]);
+          const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
+          const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
+          const double tan2 = q2 - qn * qn / (nx * nx + ny * ny + nz * nz);
+          if (tan2 > rho * rho) {
+            const double tl = std::sqrt(tan2) - rho;
+            if (std::sqrt(h * h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol) > B.best) continue;
+          }
+        }
         test_tri(k, li);
       }
     }
@@ -414,7 +468,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   // tight before the descent (answers do not depend on the order).
   if (s.seed_tri < t_.tris.size() && s.seed_leaf < t_.leaves.size()) {
     test_tri(s.seed_tri, s.seed_leaf);
-    scan_leaf(s.seed_leaf);
+    scan_leaf(s.seed_leaf, PlaneHint{});
   } else if (s.seed_tri < t_.tris.size()) {
     test_tri(s.seed_tri, UINT32_MAX);
   }
@@ -445,11 +499,37 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     }
     const Node& nd = nodes[ni];
     float m = -std::numeric_limits<float>::infinity();
+    std::uint32_t km = 0;
     const Plane* pl = planes + nd.plane_begin;
-    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
-      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
+      const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
+      if (v > m) { m = v; km = k; }
+    }
     counters.planes_tested += nd.plane_count;
-    return std::max(b, double(m) - slack);
+    const double h = double(m) - slack;
+    b = std::max(b, h);
+    if (b > B.best || h <= 0) return b;
+    // The most separating plane and the node box's bounding sphere (centre c, radius rho)
+    // together: every point y of the geometry has n.(p - y) >= h and |y - c| <= rho, so its
+    // component of p - y across n is >= |tangential part of (p - c)| - rho, and
+    // |p - y|^2 >= h^2 + that^2. On a flat or gently curved patch seen from afar (every plane
+    // and box bound about the distance) this is the bound that grows away from the foot of p.
+    // `h` already carries the plane's slack; the rest (float normal not exactly unit, the
+    // rounding of this double computation) is covered by 1e-6 (|p - c| + rho) + tol.
+    const BlockBox& bx = nbox[ni];
+    const double cx = 0.5 * (double(bx.lo[0]) + double(bx.hi[0])), cy = 0.5 * (double(bx.lo[1]) + double(bx.hi[1])),
+                 cz = 0.5 * (double(bx.lo[2]) + double(bx.hi[2]));
+    const double ex = double(bx.hi[0]) - double(bx.lo[0]), ey = double(bx.hi[1]) - double(bx.lo[1]),
+                 ez = double(bx.hi[2]) - double(bx.lo[2]);
+    if (!(ex >= 0 && ey >= 0 && ez >= 0) || !std::isfinite(ex + ey + ez)) return b;  // empty / no box
+    const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double nx = double(pl[km].n[0]), ny = double(pl[km].n[1]), nz = double(pl[km].n[2]);
+    const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
+    const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
+    const double tan2 = q2 - qn * qn / (nx * nx + ny * ny + nz * nz);
+    if (!(tan2 > rho * rho)) return b;
+    const double tl = std::sqrt(tan2) - rho;
+    return std::max(b, std::sqrt(h * h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol));
   };
 
   StackItem stack[8 * (kMaxLevel + 2)];
@@ -497,7 +577,20 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     const Node& nd = nodes[it.node];
     ++counters.nodes_visited;
     if (nd.kind == NodeKind::leaf) {
-      scan_leaf(nd.index);
+      if (leaf_stamp_[nd.index] == qid) continue;
+      PlaneHint hn;
+      float m = -std::numeric_limits<float>::infinity();
+      const Plane* pl = planes + nd.plane_begin;
+      for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
+        const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
+        if (v > m) {
+          m = v;
+          hn.n[0] = double(pl[k].n[0]); hn.n[1] = double(pl[k].n[1]); hn.n[2] = double(pl[k].n[2]);
+        }
+      }
+      counters.planes_tested += nd.plane_count;
+      hn.h = double(m) - slack;
+      scan_leaf(nd.index, hn);
       continue;
     }
     if (nd.kind != NodeKind::inner) continue;
