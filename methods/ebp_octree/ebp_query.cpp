@@ -384,7 +384,6 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     std::pair<double, std::uint32_t>* ord = order_.data();
     std::uint32_t m = 0;
     counters.planes_tested += nb;
-    const double nn = hn.n[0] * hn.n[0] + hn.n[1] * hn.n[1] + hn.n[2] * hn.n[2];
     for (std::uint32_t j = 0; j < nb; ++j) {
       double d2 = box_d2(bb[j], p);
       if (d2 > lim2) continue;
@@ -399,7 +398,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
         const double qx = p.x - 0.5 * (double(x.lo[0]) + double(x.hi[0])), qy = p.y - 0.5 * (double(x.lo[1]) + double(x.hi[1])),
                      qz = p.z - 0.5 * (double(x.lo[2]) + double(x.hi[2]));
         const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * hn.n[0] + qy * hn.n[1] + qz * hn.n[2];
-        const double tan2 = q2 - qn * qn / nn;
+        const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6, as for triangles
         if (tan2 > rho * rho) {
           const double tl = std::sqrt(tan2) - rho;
           const double cb = std::sqrt(hn.h * hn.h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol);
@@ -453,10 +452,13 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
           const double nx = double(t.n[0]), ny = double(t.n[1]), nz = double(t.n[2]);
           const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
           const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
-          const double tan2 = q2 - qn * qn / (nx * nx + ny * ny + nz * nz);
+          // |n|^2 >= 1 - 1e-6 (a unit vector rounded to float, or zero: then h < 0), so
+          // q2 - qn^2 (1 + 1e-6) <= the tangential part squared: no division needed.
+          const double tan2 = q2 - qn * qn * (1.0 + 1e-6);
           if (tan2 > rho * rho) {
             const double tl = std::sqrt(tan2) - rho;
-            if (std::sqrt(h * h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol) > B.best) continue;
+            const double lim = B.best + 1e-6 * (std::fabs(qx) + std::fabs(qy) + std::fabs(qz) + rho) + tol;
+            if (h * h + tl * tl > lim * lim) continue;
           }
         }
         test_tri(k, li);
@@ -526,7 +528,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     const double nx = double(pl[km].n[0]), ny = double(pl[km].n[1]), nz = double(pl[km].n[2]);
     const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
     const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
-    const double tan2 = q2 - qn * qn / (nx * nx + ny * ny + nz * nz);
+    const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6: a lower bound, no division
     if (!(tan2 > rho * rho)) return b;
     const double tl = std::sqrt(tan2) - rho;
     return std::max(b, std::sqrt(h * h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol));
