@@ -180,6 +180,7 @@ struct DistanceBest {
   Vec3d closest;
   std::uint32_t k = UINT32_MAX;     ///< LeafTri index of the best, if the last call found it in its tree
   std::uint32_t leaf = UINT32_MAX;  ///< and the leaf it was found in
+  std::uint32_t node = UINT32_MAX;  ///< and that leaf's node, if known
 };
 
 /// Where and how Query::distance_bound starts.
@@ -187,6 +188,7 @@ struct DistanceStart {
   const std::uint32_t* key_of = nullptr;  ///< LeafTri::tri -> key (increasing); null: key = tri
   std::uint32_t seed_tri = UINT32_MAX;    ///< a LeafTri index tested first (a valid upper bound)
   std::uint32_t seed_leaf = UINT32_MAX;   ///< a leaf scanned before the descent
+  std::uint32_t seed_node = UINT32_MAX;   ///< its node, if known (its planes then bound the blocks)
   std::uint32_t node = 0;                 ///< the subtree searched (its whole geometry)
 };
 
@@ -230,6 +232,7 @@ class Query {
   int last_level_ = 0;
   std::uint32_t last_tri_ = UINT32_MAX;  // LeafTri index of the previous closest triangle
   std::uint32_t last_leaf_ = UINT32_MAX;  // and the leaf where it was found
+  std::uint32_t last_leaf_node_ = UINT32_MAX;  // and that leaf's node
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;

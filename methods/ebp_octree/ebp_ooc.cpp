@@ -32,7 +32,7 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
 }
 
 void OutOfCore::reset_path() {
-  last_page_ = last_k_ = last_leaf_ = UINT32_MAX;
+  last_page_ = last_k_ = last_leaf_ = last_node_ = UINT32_MAX;
   if (cold_) {
     cache_.clear();
     store_->drop_os_cache();
@@ -100,7 +100,7 @@ inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f
 /// The best triangle so far of one distance query, over all pages.
 struct OutOfCore::Best {
   DistanceBest b;  // key = input triangle index
-  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX;
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX, node = UINT32_MAX;
   float a[3], bb[3], c[3];
 };
 
@@ -116,6 +116,7 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
   if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) {
     s.seed_tri = last_k_;
     s.seed_leaf = last_leaf_;
+    s.seed_node = last_node_;
   }
   e.query->distance_bound(p, bst.b, s);
   if (bst.b.k != UINT32_MAX) {
@@ -123,6 +124,7 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
     bst.page = id;
     bst.k = bst.b.k;
     bst.leaf = bst.b.leaf;
+    bst.node = bst.b.node;
     for (int i = 0; i < 3; ++i) { bst.a[i] = tr.a[i]; bst.bb[i] = tr.b[i]; bst.c[i] = tr.c[i]; }
   }
 }
@@ -199,6 +201,7 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
     last_page_ = bst.page;
     last_k_ = bst.k;
     last_leaf_ = bst.leaf;
+    last_node_ = bst.node;
   }
   return ans;
 }

@@ -35,6 +35,7 @@ void Query::reset_path() {
   last_node_ = UINT32_MAX;
   last_tri_ = UINT32_MAX;
   last_leaf_ = UINT32_MAX;
+  last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
   prev_leaf_ = UINT32_MAX;
 }
@@ -301,6 +302,7 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   if (coherent_) {
     s.seed_tri = last_tri_;
     s.seed_leaf = last_leaf_;
+    s.seed_node = last_leaf_node_;
   }
   distance_bound(p, b, s);
   DistanceAnswer r;
@@ -313,6 +315,7 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   if (coherent_) {
     last_tri_ = b.k;
     last_leaf_ = b.leaf;
+    last_leaf_node_ = b.node;
   }
   return r;
 }
@@ -324,7 +327,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     query_id_ = 1;
   }
   const std::uint32_t qid = query_id_;
-  B.k = B.leaf = UINT32_MAX;
+  B.k = B.leaf = B.node = UINT32_MAX;
   const LeafTri* tris = t_.tris.data();
   const std::uint32_t* key_of = s.key_of;
 
@@ -336,6 +339,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
                               t_.root_size);
   double lim2 = std::numeric_limits<double>::infinity();  // (best + tol)^2
 
+  std::uint32_t scan_node = UINT32_MAX;  // the node of the leaf being scanned, if known
   auto test_tri = [&](std::uint32_t k, std::uint32_t leaf) {
     const LeafTri& t = tris[k];
     if (stamp_[t.tri] == qid) return;
@@ -350,6 +354,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
       B.key = key;
       B.k = k;
       B.leaf = leaf;
+      B.node = scan_node;
       B.closest = q;
       lim2 = (B.best + tol) * (B.best + tol);
     }
@@ -466,15 +471,6 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     }
   };
 
-  // Coherent start: the previous closest triangle, then its whole leaf, so that the bound is
-  // tight before the descent (answers do not depend on the order).
-  if (s.seed_tri < t_.tris.size() && s.seed_leaf < t_.leaves.size()) {
-    test_tri(s.seed_tri, s.seed_leaf);
-    scan_leaf(s.seed_leaf, PlaneHint{});
-  } else if (s.seed_tri < t_.tris.size()) {
-    test_tri(s.seed_tri, UINT32_MAX);
-  }
-
   // Plane bounds are evaluated in float in the root's frame; `slack` covers their rounding
   // (normals unit to 1e-7, float products), so that every bound stays a lower bound.
   const Vec3d pr = p - t_.root_centre;
@@ -483,6 +479,37 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   const Plane* planes = t_.planes.data();
   const Node* nodes = t_.nodes.data();
   const BlockBox* nbox = t_.node_box.data();
+
+  // A leaf's most separating plane at p, for the block bounds of its scan.
+  auto leaf_hint = [&](const Node& nd) {
+    PlaneHint hn;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
+      const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
+      if (v > m) {
+        m = v;
+        hn.n[0] = double(pl[k].n[0]); hn.n[1] = double(pl[k].n[1]); hn.n[2] = double(pl[k].n[2]);
+      }
+    }
+    counters.planes_tested += nd.plane_count;
+    hn.h = double(m) - slack;
+    return hn;
+  };
+
+  // Coherent start: the previous closest triangle, then its whole leaf (with its plane hint when
+  // its node is known), so that the bound is tight before the descent (answers do not depend on
+  // the order).
+  if (s.seed_tri < t_.tris.size() && s.seed_leaf < t_.leaves.size()) {
+    const bool known = s.seed_node < t_.nodes.size() && nodes[s.seed_node].kind == NodeKind::leaf &&
+                       nodes[s.seed_node].index == s.seed_leaf;
+    scan_node = known ? s.seed_node : UINT32_MAX;
+    test_tri(s.seed_tri, s.seed_leaf);
+    scan_leaf(s.seed_leaf, known ? leaf_hint(nodes[s.seed_node]) : PlaneHint{});
+  } else if (s.seed_tri < t_.tris.size()) {
+    scan_node = UINT32_MAX;
+    test_tri(s.seed_tri, UINT32_MAX);
+  }
 
   // A node's lower bound: its cell box, then the box of its geometry, then its planes; each
   // stage only when the previous ones do not already prune it.
@@ -580,19 +607,8 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     ++counters.nodes_visited;
     if (nd.kind == NodeKind::leaf) {
       if (leaf_stamp_[nd.index] == qid) continue;
-      PlaneHint hn;
-      float m = -std::numeric_limits<float>::infinity();
-      const Plane* pl = planes + nd.plane_begin;
-      for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
-        const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
-        if (v > m) {
-          m = v;
-          hn.n[0] = double(pl[k].n[0]); hn.n[1] = double(pl[k].n[1]); hn.n[2] = double(pl[k].n[2]);
-        }
-      }
-      counters.planes_tested += nd.plane_count;
-      hn.h = double(m) - slack;
-      scan_leaf(nd.index, hn);
+      scan_node = it.node;
+      scan_leaf(nd.index, leaf_hint(nd));
       continue;
     }
     if (nd.kind != NodeKind::inner) continue;
