@@ -429,6 +429,10 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
       counters.planes_tested += k1 - k0;
       for (std::uint32_t k = k0; k < k1; ++k) {
         const LeafTri& t = tris[k];
+        // Face plane first (one dot product), then the box one axis at a time (early exit).
+        const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+        const double h = double(std::fabs(sv)) - eps_p;
+        if (h > B.best) continue;
         double bd2 = 0;
         bool far = false;
         for (int a = 0; a < 3; ++a) {
@@ -438,9 +442,6 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
           if (bd2 * (1.0 - 1e-12) > B.best2) { far = true; break; }
         }
         if (far) continue;
-        const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
-        const double h = double(std::fabs(sv)) - eps_p;
-        if (h > B.best) continue;
         // Face plane and the vertices' bounding sphere together (as for nodes, see
         // lower_bound): |p - y|^2 >= h^2 + (|tangential part of p - c| - rho)^2 for every y of
         // the triangle. Far from a flat or gently curved patch, the face planes of all its
