@@ -20,7 +20,6 @@ class PageCache {
     std::unique_ptr<Page> page;
     std::optional<Query> query;  ///< over page->tree (which never moves)
     std::size_t bytes = 0;       ///< decoded page + query state
-    std::vector<std::uint64_t> stamp;  ///< per local triangle: last distance query that tested it
   };
 
   PageCache(const StoreReader& store, std::size_t budget_bytes, bool coherent);

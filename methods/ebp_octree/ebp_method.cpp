@@ -87,8 +87,9 @@ nlohmann::json stats_json(const ebp::Octree& t) {
                         {"per_triangle", s.triangles ? double(s.triangle_refs) / double(s.triangles) : 0.0},
                         {"per_leaf_mean", s.leaves ? double(s.triangle_refs) / double(s.leaves) : 0.0},
                         {"per_leaf_max", s.max_refs_per_leaf}};
-  j["bytes"] = t.bytes();
-  j["bytes_per_triangle"] = s.triangles ? double(t.bytes()) / double(s.triangles) : 0.0;
+  j["bytes"] = t.bytes() + t.derived_bytes();
+  j["derived_bytes"] = t.derived_bytes();  // leaf-block and node boxes, computed at build/load
+  j["bytes_per_triangle"] = s.triangles ? double(t.bytes() + t.derived_bytes()) / double(s.triangles) : 0.0;
   j["tightness"] = {
       {"method", "exact: volume of the convex polytope cell box ∩ bounding planes, over the box volume"},
       {"leaves", s.leaf_box_volume > 0 ? s.leaf_volume / s.leaf_box_volume : 0.0},
@@ -119,7 +120,8 @@ class EbpOctreeMethod final : public Method {
     if (query_) query_->reset_path();
   }
   std::size_t structure_bytes() const override {
-    return tree_.bytes() + (query_ ? std::size_t(tree_.num_triangles) * sizeof(std::uint32_t) : 0);
+    return tree_.bytes() + tree_.derived_bytes() +
+           (query_ ? (std::size_t(tree_.num_triangles) + tree_.leaves.size()) * sizeof(std::uint32_t) : 0);
   }
   std::vector<Counter> counters() const override {
     if (!query_) return {};
@@ -192,7 +194,8 @@ void add_stats_command(CLI::App& ebp_cmd) {
     std::printf("  triangle refs     %zu (%.2f per triangle; %.1f per leaf, max %zu)\n", s.triangle_refs,
                 j["triangle_refs"]["per_triangle"].get<double>(), j["triangle_refs"]["per_leaf_mean"].get<double>(),
                 s.max_refs_per_leaf);
-    std::printf("  memory            %zu bytes, %.1f bytes per triangle\n", t.bytes(), j["bytes_per_triangle"].get<double>());
+    std::printf("  memory            %zu bytes, %.1f bytes per triangle (%zu of derived boxes)\n", t.bytes() + t.derived_bytes(),
+                j["bytes_per_triangle"].get<double>(), t.derived_bytes());
     std::printf("  tightness         bounding volume / cell box: %.3f leaves, %.3f inner nodes (exact polytope volumes)\n",
                 j["tightness"]["leaves"].get<double>(), j["tightness"]["inner"].get<double>());
     std::printf("  colouring         %zu winding fallbacks, %zu degenerate edges, %zu leaves without reference\n",

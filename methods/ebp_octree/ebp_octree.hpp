@@ -21,6 +21,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -81,6 +83,14 @@ struct Leaf {
 };
 static_assert(sizeof(Leaf) == 40, "Leaf is 40 bytes");
 
+/// A float axis-aligned box (derived data, leaf_blocks.hpp): of a group of kBlockTris consecutive
+/// LeafTris of a leaf, or of a node's geometry within its cell.
+struct BlockBox {
+  float lo[3], hi[3];
+};
+static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
+inline constexpr std::uint32_t kBlockTris = 8;
+
 struct BuildParams {
   double leaf_factor = 5.0;     ///< leaf cell size >= leaf_factor x average edge length
   int max_planes = 8;           ///< bounding planes per node (at most)
@@ -132,6 +142,13 @@ class Octree {
   std::vector<Leaf> leaves;
   std::vector<LeafTri> tris;
   Stats stats;
+  // --- derived from the above (leaf_blocks.cpp), by build and by every decoder; not stored ---
+  std::vector<BlockBox> blocks;           ///< box of each group of kBlockTris LeafTris of a leaf
+  std::vector<std::uint32_t> leaf_block;  ///< per leaf: its first block (ceil(tri_count / 8) blocks)
+  std::vector<BlockBox> node_box;         ///< per node: box of its triangles within its cell
+  std::size_t derived_bytes() const {
+    return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox);
+  }
 
   std::size_t bytes() const;
   double cell_size(int level) const { return root_size / double(std::uint64_t(1) << level); }
@@ -154,6 +171,27 @@ struct DistanceAnswer {
   std::int64_t triangle = -1;
 };
 
+/// The running best of a distance query, possibly over several trees (the out-of-core pages):
+/// the lexicographic minimum of (squared distance, key), key = input triangle index.
+struct DistanceBest {
+  double best2 = std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity();
+  std::uint64_t key = UINT64_MAX;
+  Vec3d closest;
+  std::uint32_t k = UINT32_MAX;     ///< LeafTri index of the best, if the last call found it in its tree
+  std::uint32_t leaf = UINT32_MAX;  ///< and the leaf it was found in
+  std::uint32_t node = UINT32_MAX;  ///< and that leaf's node, if known
+};
+
+/// Where and how Query::distance_bound starts.
+struct DistanceStart {
+  const std::uint32_t* key_of = nullptr;  ///< LeafTri::tri -> key (increasing); null: key = tri
+  std::uint32_t seed_tri = UINT32_MAX;    ///< a LeafTri index tested first (a valid upper bound)
+  std::uint32_t seed_leaf = UINT32_MAX;   ///< a leaf scanned before the descent
+  std::uint32_t seed_node = UINT32_MAX;   ///< its node, if known (its planes then bound the blocks)
+  std::uint32_t node = 0;                 ///< the subtree searched (its whole geometry)
+};
+
 /// Query state over a built Octree: per-query stamps, the coherent path state, counters.
 /// One per thread. No allocation per query.
 class Query {
@@ -163,6 +201,12 @@ class Query {
   DistanceAnswer distance(const Vec3d& p);
   /// Unsigned distance only (no inside test); fills closest/normal/triangle.
   DistanceAnswer unsigned_distance(const Vec3d& p);
+  /// Branch and bound over the subtree `s.node`, starting from the running best `b` (an upper
+  /// bound, ties kept: only what is strictly worse than it is pruned). `b` becomes the minimum of
+  /// itself and the subtree's triangles, by (squared distance, key); b.k / b.leaf are set if one
+  /// of this tree's triangles is the new best, UINT32_MAX otherwise. With the initial bound
+  /// >= the true distance, the answer is the one without it, bit for bit.
+  void distance_bound(const Vec3d& p, DistanceBest& b, const DistanceStart& s);
   void reset_path();
   QueryCounters counters;
 
@@ -196,6 +240,11 @@ class Query {
   std::uint32_t last_cell_[3] = {0, 0, 0};
   int last_level_ = 0;
   std::uint32_t last_tri_ = UINT32_MAX;  // LeafTri index of the previous closest triangle
+  std::uint32_t last_leaf_ = UINT32_MAX;  // and the leaf where it was found
+  std::uint32_t last_leaf_node_ = UINT32_MAX;  // and that leaf's node
+  // distance: leaves already scanned by this query, scratch for the block order
+  std::vector<std::uint32_t> leaf_stamp_;
+  std::vector<std::pair<double, std::uint32_t>> order_;
 };
 
 /// Winding-number change along segment p -> q over the (non-degenerate) triangles of `list`,

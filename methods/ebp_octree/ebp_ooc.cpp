@@ -3,7 +3,7 @@
 // page's own ebp::Query (the page is an Octree in the global frame, so the same leaf is reached
 // by the same computation). Distance: branch and bound over the top tree, pages visited nearest
 // bound first and skipped when their bound exceeds the best distance so far; inside a page the
-// same branch and bound as Query::unsigned_distance, started with the global best. The result is
+// page query's own branch and bound (Query::distance_bound), started with the global best. The result is
 // the lexicographic minimum of (squared distance, input triangle index) over all triangles, as
 // the in-memory answer is whatever its visiting order: the same answer, bit for bit.
 #include "ebp_ooc.hpp"
@@ -32,7 +32,7 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
 }
 
 void OutOfCore::reset_path() {
-  last_page_ = last_k_ = UINT32_MAX;
+  last_page_ = last_k_ = last_leaf_ = last_node_ = UINT32_MAX;
   if (cold_) {
     cache_.clear();
     store_->drop_os_cache();
@@ -99,142 +99,33 @@ inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f
 
 /// The best triangle so far of one distance query, over all pages.
 struct OutOfCore::Best {
-  double best2 = std::numeric_limits<double>::infinity();
-  double best = std::numeric_limits<double>::infinity();
-  std::uint32_t tri = UINT32_MAX;  // input triangle index
-  std::uint32_t page = UINT32_MAX, k = UINT32_MAX;
-  Vec3d closest;
-  float a[3], b[3], c[3];
+  DistanceBest b;  // key = input triangle index
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX, node = UINT32_MAX;
+  float a[3], bb[3], c[3];
 };
 
-// Branch and bound inside one page, started with the global best (an upper bound that keeps its
-// ties: pruning is by `bound > best` only). The same lower bounds, the same exact point-triangle
-// distance, the same tie rule as Query::unsigned_distance; only the initial bound differs, which
-// ebp::Query has no entry point for (see OUT_OF_CORE.md).
+// Inside one page: the in-memory branch and bound (Query::distance_bound) of the page's own
+// query, started with the global best (an upper bound that keeps its ties: pruning is by
+// `bound > best` only) and with the input triangle index as the tie key, over the page's
+// subtree (its roots' parent for a page below the top; the chain above it has no geometry).
 void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& bst) {
   const Octree& t = e.page->tree;
-  const std::uint32_t* gtri = e.page->global_tri.data();
-  std::uint64_t* stamp = e.stamp.data();
-  const std::uint64_t qid = query_id_;
-  const LeafTri* tris = t.tris.data();
-  QueryCounters& cnt = top_counters_;
-  auto test_tri = [&](std::uint32_t k) {
-    const LeafTri& tr = tris[k];
-    if (stamp[tr.tri] == qid) return;
-    stamp[tr.tri] = qid;
-    ++cnt.triangles_tested;
-    const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(tr.a), to_d(tr.b), to_d(tr.c));
-    const double d2 = squared_norm(q - p);
-    const std::uint32_t g = gtri[tr.tri];
-    if (d2 < bst.best2 || (d2 == bst.best2 && g < bst.tri)) {
-      bst.best2 = d2;
-      bst.best = std::sqrt(d2);
-      bst.tri = g;
-      bst.page = id;
-      bst.k = k;
-      bst.closest = q;
-      for (int i = 0; i < 3; ++i) { bst.a[i] = tr.a[i]; bst.b[i] = tr.b[i]; bst.c[i] = tr.c[i]; }
-    }
-  };
-  if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) test_tri(last_k_);
-
-  const Vec3d pr = p - t.root_centre;
-  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
-  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t.root_size);
-  const Plane* planes = t.planes.data();
-  const Node* nodes = t.nodes.data();
-  auto lower_bound = [&](const Node& nd, const Vec3d& lo, double size) {
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
-      d2 += v * v;
-    }
-    double b = d2 > 0 ? std::sqrt(d2) : 0.0;
-    float m = -std::numeric_limits<float>::infinity();
-    const Plane* pl = planes + nd.plane_begin;
-    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
-      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
-    cnt.planes_tested += nd.plane_count;
-    return std::max(b, double(m) - slack);
-  };
-  TopItem stack[8 * (kMaxLevel + 2)];
-  int sp = 0;
-  if (e.page->chain == 0) {
-    stack[sp++] = {t.root_lo, lower_bound(nodes[0], t.root_lo, t.root_size), 0u, 0};
-  } else {  // start at the page's roots (children of the last chain node), nearest popped first
-    const std::uint32_t last = e.page->chain - 2;  // the parent; chain - 1 is the white dummy
-    const int cl = int(last) + 1;
-    const double csz = t.cell_size(cl);
-    for (std::uint32_t o = 0; o < 8; ++o) {
-      const std::uint32_t ci = t.children[nodes[last].index + o];
-      const Node& cn = nodes[ci];
-      if (cn.kind != NodeKind::inner && cn.kind != NodeKind::leaf) continue;
-      std::uint32_t x, y, z;
-      octcode_cell(cn.code, &x, &y, &z);
-      const Vec3d lo{t.root_lo.x + double(x) * csz, t.root_lo.y + double(y) * csz, t.root_lo.z + double(z) * csz};
-      const double b = lower_bound(cn, lo, csz);
-      if (b > bst.best) continue;
-      TopItem x1{lo, b, ci, cl};
-      int a = sp - 1;
-      while (a >= 0 && stack[a].bound < x1.bound) { stack[a + 1] = stack[a]; --a; }
-      stack[a + 1] = x1;
-      ++sp;
-    }
+  DistanceStart s;
+  s.key_of = e.page->global_tri.data();
+  s.node = e.page->chain == 0 ? 0u : e.page->chain - 2;  // chain - 1 is the white dummy
+  if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) {
+    s.seed_tri = last_k_;
+    s.seed_leaf = last_leaf_;
+    s.seed_node = last_node_;
   }
-  while (sp > 0) {
-    const TopItem it = stack[--sp];
-    if (it.bound > bst.best) continue;
-    const Node& nd = nodes[it.node];
-    ++cnt.nodes_visited;
-    if (nd.kind == NodeKind::leaf) {
-      const Leaf& lf = t.leaves[nd.index];
-      const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
-                  pz = float(p.z - double(lf.centre[2]));
-      // lf.eps bounds the float error for points near the leaf (what `inside` asks); p may be far
-      // from it here, so the error of the float evaluation and of the float normal's length,
-      // proportional to |p - centre|, is added (measured: without it, 2 queries in 100000 of the
-      // 32M bunny's haptic path pruned their closest triangle; Query::unsigned_distance has the
-      // same issue, reported to its owner).
-      const double eps = double(lf.eps) + 1e-6 * (std::fabs(double(px)) + std::fabs(double(py)) + std::fabs(double(pz)));
-      cnt.planes_tested += lf.tri_count;
-      for (std::uint32_t k = lf.tri_begin, end = lf.tri_begin + lf.tri_count; k < end; ++k) {
-        const LeafTri& tr = tris[k];
-        // Two cheap lower bounds of the triangle's distance: its face plane, its bounding box
-        // (as Query::unsigned_distance does).
-        const float s = tr.n[0] * px + tr.n[1] * py + tr.n[2] * pz - tr.d;
-        if (double(std::fabs(s)) - eps > bst.best) continue;
-        double bd2 = 0;
-        for (int a = 0; a < 3; ++a) {
-          const double lo = double(std::min({tr.a[a], tr.b[a], tr.c[a]})), hi = double(std::max({tr.a[a], tr.b[a], tr.c[a]}));
-          const double v = std::max({lo - p[a], 0.0, p[a] - hi});
-          bd2 += v * v;
-        }
-        if (bd2 * (1.0 - 1e-12) > bst.best2) continue;
-        test_tri(k);
-      }
-      continue;
-    }
-    if (nd.kind != NodeKind::inner) continue;
-    const int cl = it.level + 1;
-    const double csz = t.cell_size(cl);
-    TopItem kids[8];
-    int nk = 0;
-    for (int o = 0; o < 8; ++o) {
-      const std::uint32_t ci = t.children[nd.index + std::uint32_t(o)];
-      const Node& cn = nodes[ci];
-      if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
-      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
-      const double b = lower_bound(cn, lo, csz);
-      if (b > bst.best) continue;
-      kids[nk++] = {lo, b, ci, cl};
-    }
-    for (int a = 1; a < nk; ++a) {
-      TopItem x = kids[a];
-      int b = a - 1;
-      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
-      kids[b + 1] = x;
-    }
-    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+  e.query->distance_bound(p, bst.b, s);
+  if (bst.b.k != UINT32_MAX) {
+    const LeafTri& tr = t.tris[bst.b.k];
+    bst.page = id;
+    bst.k = bst.b.k;
+    bst.leaf = bst.b.leaf;
+    bst.node = bst.b.node;
+    for (int i = 0; i < 3; ++i) { bst.a[i] = tr.a[i]; bst.bb[i] = tr.b[i]; bst.c[i] = tr.c[i]; }
   }
 }
 
@@ -271,7 +162,7 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
   stack[sp++] = {root_lo_, lower_bound(top_[0], root_lo_, root_size_), 0u, 0};
   while (sp > 0) {
     const TopItem it = stack[--sp];
-    if (it.bound > bst.best) continue;
+    if (it.bound > bst.b.best) continue;
     const TopNode& nd = top_[it.node];
     ++top_counters_.nodes_visited;
     if (nd.kind == TopKind::page) {
@@ -289,7 +180,7 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
       if (cn.kind == TopKind::white || cn.kind == TopKind::black) continue;
       const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
       const double b = lower_bound(cn, lo, csz);
-      if (b > bst.best) continue;
+      if (b > bst.b.best) continue;
       kids[nk++] = {lo, b, ci, cl};
     }
     for (int a = 1; a < nk; ++a) {  // descending bound: nearest popped first
@@ -301,14 +192,16 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
     for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
   }
   DistanceAnswer ans;
-  if (bst.tri == UINT32_MAX) return ans;  // cannot happen: the mesh has a triangle
-  ans.distance = bst.best;
-  ans.closest = bst.closest;
-  ans.normal = bvhbench::triangle_normal(to_d(bst.a), to_d(bst.b), to_d(bst.c));
-  ans.triangle = std::int64_t(bst.tri);
+  if (bst.page == UINT32_MAX) return ans;  // cannot happen: the mesh has a triangle
+  ans.distance = bst.b.best;
+  ans.closest = bst.b.closest;
+  ans.normal = bvhbench::triangle_normal(to_d(bst.a), to_d(bst.bb), to_d(bst.c));
+  ans.triangle = std::int64_t(bst.b.key);
   if (coherent_) {
     last_page_ = bst.page;
     last_k_ = bst.k;
+    last_leaf_ = bst.leaf;
+    last_node_ = bst.node;
   }
   return ans;
 }

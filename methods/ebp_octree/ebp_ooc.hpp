@@ -44,8 +44,8 @@ class OutOfCore {
   QueryCounters top_counters_;
   std::vector<std::uint64_t> page_stamp_;
   std::uint64_t query_id_ = 0;
-  // coherent: page and LeafTri index (in that page) of the previous closest triangle
-  std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX;
+  // coherent: page, LeafTri index and leaf (in that page) of the previous closest triangle
+  std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX, last_leaf_ = UINT32_MAX, last_node_ = UINT32_MAX;
 
   struct Best;
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);

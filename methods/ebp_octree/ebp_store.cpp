@@ -3,6 +3,7 @@
 // file is checked before it is used as a size, an offset or an index. See ebp_store.hpp and
 // OUT_OF_CORE.md.
 #include "ebp_store.hpp"
+#include "leaf_blocks.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -721,6 +722,7 @@ std::unique_ptr<Page> StoreReader::load_page(std::uint32_t id, std::uint64_t* by
   T.leaf_level = L;
   T.num_triangles = ph.nlocal;
   set_tree_closed(T, (h_.flags & kStoreClosed) != 0, 0);
+  compute_leaf_blocks(T);  // derived boxes (not in the file)
   page->chain = chain;
   return page;
 }
@@ -799,6 +801,7 @@ Octree StoreReader::load_all() const {
     return ni;
   };
   copy_top(0);
+  compute_leaf_blocks(T);  // derived boxes (not in the file)
   return T;
 }
 

@@ -131,7 +131,9 @@ struct Page {
   std::uint32_t chain = 0;  ///< nodes[0, chain - 1) are the root-to-parent chain, nodes[chain - 1] the dummy (0: root page)
   Octree tree;
   std::vector<std::uint32_t> global_tri;
-  std::size_t bytes() const { return tree.bytes() + global_tri.capacity() * sizeof(std::uint32_t); }
+  std::size_t bytes() const {
+    return tree.bytes() + tree.derived_bytes() + global_tri.capacity() * sizeof(std::uint32_t);
+  }
 };
 
 /// The read side: header, top tree and directory in memory (pinned), pages on demand.

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "ebp_octree.hpp"
+#include "leaf_blocks.hpp"
 #include "mesh.hpp"
 #include "octcode.hpp"
 #include "predicates.hpp"
@@ -572,6 +575,182 @@ TEST(EbpBuild, ParallelBuildIsIdentical) {
   for (std::size_t i = 0; i < a.planes.size(); ++i) ASSERT_EQ(a.planes[i].d, b.planes[i].d);
 }
 
+// Leaf blocks (leaf_blocks.hpp): each block box holds its triangles, each node box holds its
+// leaves' triangles within their cells, a leaf block is ordered by its set alone (the same
+// triangles, and any permutation of them orders to the same block).
+TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
+  const Mesh m = bvhbench::load_mesh(shared_mesh("cow.obj"));
+  const Octree t = build(m);
+  ASSERT_TRUE(has_leaf_blocks(t));
+  auto inside = [](const BlockBox& b, const float* v) {
+    for (int a = 0; a < 3; ++a)
+      if (!(b.lo[a] <= v[a] && v[a] <= b.hi[a])) return false;
+    return true;
+  };
+  std::mt19937_64 rng(3);
+  std::size_t ordered = 0;
+  for (std::size_t li = 0; li < t.leaves.size(); ++li) {
+    const Leaf& lf = t.leaves[li];
+    ASSERT_EQ(t.leaf_block[li] + (lf.tri_count + kBlockTris - 1) / kBlockTris,
+              li + 1 < t.leaves.size() ? t.leaf_block[li + 1] : std::uint32_t(t.blocks.size()));
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+      const LeafTri& r = t.tris[lf.tri_begin + k];
+      const BlockBox& b = t.blocks[t.leaf_block[li] + k / kBlockTris];
+      ASSERT_TRUE(inside(b, r.a) && inside(b, r.b) && inside(b, r.c)) << li << " " << k;
+    }
+    std::vector<LeafTri> blk(t.tris.begin() + lf.tri_begin, t.tris.begin() + lf.tri_begin + lf.tri_count);
+    std::vector<LeafTri> sh = blk;
+    std::shuffle(sh.begin(), sh.end(), rng);
+    order_leaf_triangles(sh.data(), std::uint32_t(sh.size()));
+    ASSERT_EQ(0, std::memcmp(sh.data(), blk.data(), blk.size() * sizeof(LeafTri))) << "leaf " << li;
+    ordered += lf.tri_count > kBlockTris;
+  }
+  EXPECT_GT(ordered, 10u);
+  // Node boxes: a leaf's holds every point of its triangles within its cell (checked on the
+  // triangles' vertices inside the cell and on their boxes clipped to the cell); a parent's
+  // holds its children's.
+  for (std::size_t i = 0; i < t.nodes.size(); ++i) {
+    const Node& nd = t.nodes[i];
+    const BlockBox& b = t.node_box[i];
+    if (nd.kind == NodeKind::leaf) {
+      const Leaf& lf = t.leaves[nd.index];
+      Vec3d lo, hi;
+      t.cell_box(nd.code, &lo, &hi);
+      for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
+        const LeafTri& r = t.tris[lf.tri_begin + k];
+        for (int a = 0; a < 3; ++a) {
+          const double tlo = std::min({double(r.a[a]), double(r.b[a]), double(r.c[a])}),
+                       thi = std::max({double(r.a[a]), double(r.b[a]), double(r.c[a])});
+          const double clo = std::max(tlo, lo[a]), chi = std::min(thi, hi[a]);
+          if (clo > chi) continue;  // listed within the margin only
+          ASSERT_LE(double(b.lo[a]), clo) << i;
+          ASSERT_GE(double(b.hi[a]), chi) << i;
+        }
+      }
+    } else if (nd.kind == NodeKind::inner) {
+      for (int o = 0; o < 8; ++o) {
+        const std::uint32_t c = t.children[nd.index + o];
+        if (t.nodes[c].kind != NodeKind::inner && t.nodes[c].kind != NodeKind::leaf) continue;
+        for (int a = 0; a < 3; ++a) {
+          ASSERT_LE(b.lo[a], t.node_box[c].lo[a]);
+          ASSERT_GE(b.hi[a], t.node_box[c].hi[a]);
+        }
+      }
+    }
+  }
+}
+
+// The answer is the brute-force lexicographic minimum of (squared distance, triangle index),
+// bit for bit, near and far from the surface, coherent or not.
+TEST(EbpQuery, DistanceIsTheLexicographicMinimumBitForBit) {
+  for (const char* name : {"cow.obj", "fandisk.obj"}) {
+    const Mesh m = bvhbench::load_mesh(shared_mesh(name));
+    const Octree t = build(m);
+    const Reference ref(m.vertices, m.triangles);
+    auto pts = sample_points(ref, 150, 250, 7);
+    const Box3d bb = ref.bounds();
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-3, 4);
+    for (int i = 0; i < 100; ++i) {  // far points
+      const Vec3d e = bb.extent();
+      pts.push_back({bb.lo.x + u(rng) * e.x, bb.lo.y + u(rng) * e.y, bb.lo.z + u(rng) * e.z});
+    }
+    for (bool coherent : {false, true}) {
+      Query q(t, coherent);
+      for (const Vec3d& p : pts) {
+        double best2 = std::numeric_limits<double>::infinity();
+        std::int64_t bi = -1;
+        Vec3d bq;
+        for (std::size_t i = 0; i < ref.f.size(); ++i) {
+          const Vec3d c = bvhbench::closest_point_on_triangle(p, ref.v[ref.f[i][0]], ref.v[ref.f[i][1]], ref.v[ref.f[i][2]]);
+          const double d2 = squared_norm(c - p);
+          if (d2 < best2) { best2 = d2; bi = std::int64_t(i); bq = c; }
+        }
+        const DistanceAnswer a = q.unsigned_distance(p);
+        ASSERT_EQ(a.triangle, bi) << name;
+        ASSERT_EQ(a.distance, std::sqrt(best2)) << name;
+        ASSERT_EQ(a.closest, bq) << name;
+      }
+    }
+  }
+}
+
+// distance_bound: an initial bound >= the true distance changes nothing; the true answer as the
+// initial bound is kept (nothing is strictly better); a subtree search finds the best of its
+// leaves' triangles.
+TEST(EbpQuery, DistanceBoundEntryPoint) {
+  const Mesh m = bvhbench::load_mesh(shared_mesh("cow.obj"));
+  const Octree t = build(m);
+  const Reference ref(m.vertices, m.triangles);
+  const auto pts = sample_points(ref, 100, 150, 5);
+  Query q(t, false);
+  for (const Vec3d& p : pts) {
+    const DistanceAnswer a = q.unsigned_distance(p);
+    for (double f : {1.0, 1.0 + 1e-9, 2.0}) {
+      DistanceBest b;
+      b.best = a.distance * f;
+      b.best2 = b.best * b.best;
+      if (f == 1.0) b.best2 = squared_norm(a.closest - p);
+      b.key = UINT64_MAX;  // any triangle at exactly the bound wins the tie
+      q.distance_bound(p, b, DistanceStart{});
+      ASSERT_NE(b.k, UINT32_MAX);
+      ASSERT_EQ(std::int64_t(t.tris[b.k].tri), a.triangle);
+      ASSERT_EQ(b.best, a.distance);
+      ASSERT_EQ(b.closest, a.closest);
+    }
+    DistanceBest b;  // the answer itself: nothing is strictly better
+    b.best2 = squared_norm(a.closest - p);
+    b.best = std::sqrt(b.best2);
+    b.key = std::uint64_t(a.triangle);
+    q.distance_bound(p, b, DistanceStart{});
+    EXPECT_EQ(b.k, UINT32_MAX);
+    EXPECT_EQ(b.key, std::uint64_t(a.triangle));
+  }
+  // Subtrees: the root's grey children, each against brute force over its leaves' triangles.
+  int inside_cell = 0;
+  const Node& root = t.nodes[0];
+  ASSERT_EQ(root.kind, NodeKind::inner);
+  for (int o = 0; o < 8; ++o) {
+    const std::uint32_t c = t.children[root.index + o];
+    if (t.nodes[c].kind != NodeKind::inner && t.nodes[c].kind != NodeKind::leaf) continue;
+    std::set<std::uint32_t> sub;
+    for (std::uint32_t i = c; i < t.nodes[c].next; ++i)
+      if (t.nodes[i].kind == NodeKind::leaf) {
+        const Leaf& lf = t.leaves[t.nodes[i].index];
+        for (std::uint32_t k = 0; k < lf.tri_count; ++k) sub.insert(t.tris[lf.tri_begin + k].tri);
+      }
+    for (std::size_t j = 0; j < pts.size(); j += 5) {
+      const Vec3d& p = pts[j];
+      double best2 = std::numeric_limits<double>::infinity();
+      std::uint32_t bi = 0;
+      for (std::uint32_t i : sub) {
+        const auto& f = ref.f[i];
+        const double d2 = squared_norm(bvhbench::closest_point_on_triangle(p, ref.v[f[0]], ref.v[f[1]], ref.v[f[2]]) - p);
+        if (d2 < best2) { best2 = d2; bi = i; }
+      }
+      DistanceBest b;
+      DistanceStart s;
+      s.node = c;
+      q.distance_bound(p, b, s);
+      ASSERT_NE(b.k, UINT32_MAX);
+      ASSERT_TRUE(sub.count(t.tris[b.k].tri));
+      // The subtree stands for its triangles within its cell: at least the best listed one, and
+      // exactly it when its closest point is in the cell.
+      ASSERT_GE(b.best2, best2);
+      const auto& f = ref.f[bi];
+      const Vec3d cp = bvhbench::closest_point_on_triangle(p, ref.v[f[0]], ref.v[f[1]], ref.v[f[2]]);
+      Vec3d lo, hi;
+      t.cell_box(t.nodes[c].code, &lo, &hi);
+      if (cp.x >= lo.x && cp.y >= lo.y && cp.z >= lo.z && cp.x <= hi.x && cp.y <= hi.y && cp.z <= hi.z) {
+        ASSERT_EQ(t.tris[b.k].tri, bi);
+        ASSERT_EQ(b.best2, best2);
+        ++inside_cell;
+      }
+    }
+  }
+  EXPECT_GT(inside_cell, 10);
+}
+
 #ifndef EBP_NO_REGISTRY
 // The method through the registry, against the brute_force method, as the harness runs them.
 TEST(EbpMethod, RegistryAdapterMatchesBruteForce) {
@@ -630,5 +809,5 @@ TEST(EbpQuery, CountersAreDeterministic) {
            std::to_string(c.exact_fallbacks);
   };
   EXPECT_EQ(str(in), "1419, 48350, 16764, 114, 0, 0, 0, 286, 0") << "inside counters";
-  EXPECT_EQ(str(di), "4200, 242876, 26244, 114, 0, 0, 0, 286, 0") << "distance counters";
+  EXPECT_EQ(str(di), "3964, 149845, 20796, 114, 0, 0, 0, 286, 0") << "distance counters";
 }
