@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <exception>
 
 namespace bvhbench {
 
@@ -24,10 +25,19 @@ std::string format_seconds(double s) {
 
 Progress::Progress(std::string what, double total, bool enabled)
     : what_(std::move(what)), total_(total), enabled_(enabled && g_enabled),
-      tty_(isatty(STDERR_FILENO)), start_(std::chrono::steady_clock::now()), last_(start_) {}
+      tty_(isatty(STDERR_FILENO)), uncaught_(std::uncaught_exceptions()),
+      start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 Progress::~Progress() {
-  if (enabled_ && !finished_ && done_ > 0) finish();
+  if (!enabled_ || finished_ || done_ <= 0) return;
+  // Unwinding (an interrupt, a bad input, a full disk): the work did not finish, and the line
+  // must not say "done" just before the error message says what happened.
+  if (std::uncaught_exceptions() > uncaught_) {
+    finished_ = true;
+    print(Line::stopped);
+    return;
+  }
+  finish();
 }
 
 void Progress::update(double done) {
@@ -38,7 +48,7 @@ void Progress::update(double done) {
   // A terminal redraws often; a log gets a line every 5 s at most.
   if (since < (tty_ ? 0.25 : 5.0)) return;
   last_ = now;
-  print(false);
+  print(Line::running);
 }
 
 void Progress::finish() {
@@ -47,14 +57,18 @@ void Progress::finish() {
   if (!enabled_) return;
   double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   if (elapsed < 1.0 && !tty_) return;  // short work: no noise in logs
-  print(true);
+  print(Line::done);
 }
 
-void Progress::print(bool final) {
+void Progress::print(Line kind) {
+  const bool final = kind != Line::running;
   double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   double frac = total_ > 0 ? std::min(1.0, done_ / total_) : 0.0;
   char line[256];
-  if (final) {
+  if (kind == Line::stopped) {
+    std::snprintf(line, sizeof line, "%s: stopped at %.1f%% after %s", what_.c_str(), 100 * frac,
+                  format_seconds(elapsed).c_str());
+  } else if (final) {
     std::snprintf(line, sizeof line, "%s: done in %s", what_.c_str(), format_seconds(elapsed).c_str());
   } else {
     double left = frac > 0 ? elapsed * (1 - frac) / frac : NAN;

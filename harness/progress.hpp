@@ -17,10 +17,12 @@ class Progress {
   void finish();             ///< prints the final line (with elapsed time)
   static void set_global_enabled(bool on);  ///< --quiet turns all progress off
  private:
-  void print(bool final);
+  enum class Line { running, done, stopped };
+  void print(Line kind);
   std::string what_;
   double total_, done_ = 0;
   bool enabled_, finished_ = false, tty_;
+  int uncaught_;  ///< std::uncaught_exceptions() at construction: more at destruction = unwinding
   std::chrono::steady_clock::time_point start_, last_;
 };
 
