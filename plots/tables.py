@@ -179,7 +179,7 @@ def paper_rows(rs):
                                if j.get("structure.max_depth") is not None), None)
             row = {
                 "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
-                "config": js[0].config, "levels": levels,
+                "config": js[0].config, "coherent": is_coherent(key), "levels": levels,
                 "build_s": _median(j.build_seconds for j in ok),
                 "structure_bytes": _median(j.structure_bytes for j in ok),
                 "file_bytes": _median(j.file_bytes for j in ok),
@@ -230,12 +230,15 @@ def paper_tables(rs):
     for r in rows:
         by_mesh.setdefault(r["mesh"], []).append(r)
     for mesh, rs_ in by_mesh.items():
-        star = next((r for r in rs_ if r["method"] == STAR), None)
-        if star is None:
+        stars = [r for r in rs_ if r["method"] == STAR]
+        if not stars:
             continue
         for r in rs_:
             if r["method"] == STAR:   # its own variants are not peers
                 continue
+            # A path-coherent peer is compared with the EBP-Octree's coherent variant when the
+            # suite ran one (same coherence on both sides), otherwise with its default.
+            star = next((s for s in stars if s["coherent"] == r["coherent"]), stars[0])
             ratios.append([mesh, fmt.count(r["triangles"]), r["config"],
                            fmt.ratio(_ratio(star["pis_random"], r["pis_random"])),
                            fmt.ratio(_ratio(star["pis_haptic"], r["pis_haptic"])),
@@ -251,7 +254,8 @@ def paper_notes(rs):
                                           if j.method == m}) > 1)
     note = ("Rates are median queries per second over repetitions, single thread. "
             "PiS = point-in-solid (`inside`). Ratios above 1× favour the EBP-Octree: "
-            "rates are EBP/peer, build time and memory are peer/EBP. "
+            "rates are EBP/peer, build time and memory are peer/EBP; a path-coherent peer "
+            "(coherent=true) is compared with the EBP-Octree's coherent variant when it ran. "
             "A status instead of a rate means that job did not finish ok (see the non-ok table); "
             f"{WRONG_MARK} marks a rate whose answers were wrong (see Accuracy warnings). "
             "Published figures: " + PAPER_REFERENCE["citation"] + ": 2.5 kHz random and 32 kHz "

@@ -196,3 +196,25 @@ def test_unknown_methods_get_a_stable_colour():
     assert style.method_color("ebp_octree") == style.METHOD_COLORS["ebp_octree"]
     assert style.method_color("my_new_bvh") == style.method_color("my_new_bvh")
     assert style.method_color("my_new_bvh").startswith("#")
+
+
+def test_coherent_peer_is_compared_with_the_coherent_ebp_variant(tmp_path):
+    """A path-coherent peer row's ratio uses the EBP-Octree's coherent variant (same coherence on
+    both sides), not its default: bunny haptic inside, EBP coherent 1.6 MHz / Embree coherent
+    800 kHz = 2x (against the default EBP's 900 kHz it would be 1.12x)."""
+    results = tmp_path / "results_small"
+    shutil.copytree(FIXTURE, results, ignore=shutil.ignore_patterns("*.py"))
+    src = results / "runs" / "bunny__haptic-n20000-s1__inside__embree.json"
+    r = json.loads(src.read_text())
+    r["job"]["id"] += "-coherent=true"
+    r["job"]["method_spec"] = "embree:coherent=true"
+    r["job"]["params"]["coherent"] = "true"
+    r["job"]["params_key"] = "coherent=true"
+    tq = r["queries"]["throughput_qps"]
+    tq.update(median=800000.0, min=790000.0, max=810000.0, samples=[790000.0, 800000.0, 810000.0])
+    (results / "runs" / (r["job"]["id"] + ".json")).write_text(json.dumps(r))
+    proc = run_report(results)
+    assert proc.returncode == 0, proc.stderr
+    md = read(results / "report" / "paper_table.md")
+    line = next(x for x in md.splitlines() if x.startswith("| bunny") and "embree:coherent=true" in x and "×" in x)
+    assert line.split("|")[5].strip() == "2×", line
