@@ -22,45 +22,21 @@
 #include "ebp_store.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "test_support.hpp"
 
 using namespace ebp;
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string shared_mesh(const std::string& name) { return std::string(BVHBENCH_SHARED_DIR) + "/meshes/" + name; }
+std::string shared_mesh(const std::string& name) { return bvhbench::test::shared_mesh_path(name); }
 
-struct TmpDir {
-  fs::path p;
-  TmpDir() {
-    std::string t = (fs::temp_directory_path() / "ebp_extbuild_test_XXXXXX").string();
-    EXPECT_NE(::mkdtemp(t.data()), nullptr);
-    p = t;
-    fs::create_directory(p / "runs");
-  }
-  ~TmpDir() {
-    std::error_code ec;
-    fs::remove_all(p, ec);
-  }
-  std::string file(const std::string& n) const { return (p / n).string(); }
+struct TmpDir : bvhbench::test::TmpDir {
+  TmpDir() : bvhbench::test::TmpDir("ebp_extbuild_test") { fs::create_directory(p / "runs"); }
   std::string runs() const { return (p / "runs").string(); }
 };
 
-bvhbench::Mesh torus(int nu, int nv, double R = 1.0, double r = 0.35, bool open = false) {
-  bvhbench::Mesh m;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
-      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return std::uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
-  for (int i = 0; i < (open ? nu / 2 : nu); ++i)  // open: half of the tube is missing
-    for (int j = 0; j < nv; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
-}
+using bvhbench::test::torus;
 
 bvhbench::Mesh one_triangle() {
   bvhbench::Mesh m;

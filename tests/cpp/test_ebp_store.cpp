@@ -21,6 +21,7 @@
 #include "errors.hpp"
 #include "mesh.hpp"
 #include "registry.hpp"
+#include "test_support.hpp"
 
 using namespace ebp;
 namespace fs = std::filesystem;
@@ -28,38 +29,13 @@ using Tris = std::vector<std::array<std::uint32_t, 3>>;
 
 namespace {
 
-std::string shared_mesh(const std::string& name) { return std::string(BVHBENCH_SHARED_DIR) + "/meshes/" + name; }
+std::string shared_mesh(const std::string& name) { return bvhbench::test::shared_mesh_path(name); }
 
-struct TmpDir {
-  fs::path p;
-  TmpDir() {
-    std::string t = (fs::temp_directory_path() / "ebp_store_test_XXXXXX").string();
-    EXPECT_NE(::mkdtemp(t.data()), nullptr);
-    p = t;
-  }
-  ~TmpDir() {
-    std::error_code ec;
-    fs::remove_all(p, ec);
-  }
-  std::string file(const std::string& n) const { return (p / n).string(); }
+struct TmpDir : bvhbench::test::TmpDir {
+  TmpDir() : bvhbench::test::TmpDir("ebp_store_test") {}
 };
 
-/// A closed torus (procedural), nu x nv quads split in two.
-bvhbench::Mesh torus(int nu, int nv, double R = 1.0, double r = 0.35) {
-  bvhbench::Mesh m;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
-      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return std::uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
-}
+using bvhbench::test::torus;
 
 Octree build(const bvhbench::Mesh& m) {
   BuildParams bp;

@@ -13,6 +13,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
@@ -32,6 +34,23 @@
 namespace bvhbench::test {
 
 // ---- files ----
+
+/// A fresh temporary directory (PREFIX_XXXXXX under the system's), removed with its contents.
+struct TmpDir {
+  std::filesystem::path p;
+  explicit TmpDir(const std::string& prefix = "bvhbench_test") {
+    std::string t = (std::filesystem::temp_directory_path() / (prefix + "_XXXXXX")).string();
+    EXPECT_NE(::mkdtemp(t.data()), nullptr);
+    p = t;
+  }
+  ~TmpDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(p, ec);
+  }
+  TmpDir(const TmpDir&) = delete;
+  TmpDir& operator=(const TmpDir&) = delete;
+  std::string file(const std::string& n) const { return (p / n).string(); }
+};
 
 /// Path of `file` (e.g. "cow.obj") in the shared mesh folder ../shared/meshes.
 inline std::string shared_mesh_path(const std::string& file) {
@@ -98,6 +117,23 @@ inline Mesh unit_cube() {
 inline Mesh open_cup() {
   Mesh m = unit_cube();
   m.triangles.erase(m.triangles.begin() + 2, m.triangles.begin() + 4);
+  return m;
+}
+
+/// A closed torus (procedural), nu x nv quads split in two; `open` drops half of the tube.
+inline Mesh torus(int nu, int nv, double R = 1.0, double r = 0.35, bool open = false) {
+  Mesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return std::uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
+  for (int i = 0; i < (open ? nu / 2 : nu); ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
   return m;
 }
 
