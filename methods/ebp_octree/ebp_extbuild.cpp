@@ -30,6 +30,7 @@
 #include <tbb/task_arena.h>
 
 #include "ebp_build_parts.hpp"
+#include "ebp_io.hpp"
 #include "ebp_store.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
@@ -45,9 +46,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-[[noreturn]] void io_fail(const std::string& path, const std::string& what) {
-  throw std::runtime_error(path + ": " + what + ": " + std::strerror(errno));
-}
+using io::pwrite_all;
 
 // ---------------------------------------------------------------------------------------------
 // Sources
@@ -323,18 +322,10 @@ class PlySource final : public TriangleSource {
  private:
   [[noreturn]] void fail(const std::string& what) const { throw bvhbench::file_error(path_, what); }
   void read_exact(std::uint64_t off, void* dst, std::size_t n, bool hash) {
-    auto* p = static_cast<std::uint8_t*>(dst);
-    std::size_t left = n;
-    while (left > 0) {
-      const ssize_t r = ::pread(fd_, p, left, off_t(off));
-      if (r < 0) {
-        if (errno == EINTR) continue;
-        fail(std::string("read failed: ") + std::strerror(errno));
-      }
-      if (r == 0) fail("truncated (unexpected end of file)");
-      p += r;
-      left -= std::size_t(r);
-      off += std::uint64_t(r);
+    switch (io::pread_full(fd_, dst, n, off)) {
+      case io::ReadEnd::complete: break;
+      case io::ReadEnd::error: fail(std::string("read failed: ") + std::strerror(errno));
+      case io::ReadEnd::end_of_file: fail("truncated (unexpected end of file)");
     }
     if (hash) sha_ctx_.update(dst, n);
   }
@@ -365,28 +356,11 @@ struct RunFile {
   std::uint64_t records = 0;
 };
 
-void write_all(int fd, const std::string& path, const void* data, std::size_t n) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  while (n > 0) {
-    const ssize_t w = ::write(fd, p, n);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      io_fail(path, "write failed");
-    }
-    if (w == 0) {
-      errno = ENOSPC;
-      io_fail(path, "write failed");
-    }
-    p += w;
-    n -= std::size_t(w);
-  }
-}
-
 class RunReader {
  public:
   RunReader(const RunFile& rf, std::size_t buf_records) : path_(rf.path), left_(rf.records), buf_(std::max<std::size_t>(buf_records, 16)) {
     fd_ = ::open(rf.path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) io_fail(rf.path, "cannot open a sorted run");
+    if (fd_ < 0) io::fail(rf.path, "cannot open a sorted run");
     ::posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
   }
   ~RunReader() {
@@ -404,21 +378,12 @@ class RunReader {
   bool fill() {
     if (left_ == 0) return false;
     const std::size_t n = std::size_t(std::min<std::uint64_t>(left_, buf_.size()));
-    auto* p = reinterpret_cast<std::uint8_t*>(buf_.data());
-    std::size_t want = n * sizeof(Rec);
-    while (want > 0) {
-      const ssize_t r = ::read(fd_, p, want);
-      if (r < 0) {
-        if (errno == EINTR) continue;
-        io_fail(path_, "read failed");
-      }
-      if (r == 0) {
-        errno = EIO;
-        io_fail(path_, "sorted run shorter than written");
-      }
-      p += r;
-      want -= std::size_t(r);
+    switch (io::pread_full(fd_, buf_.data(), n * sizeof(Rec), off_)) {
+      case io::ReadEnd::complete: break;
+      case io::ReadEnd::error: io::fail(path_, "read failed");
+      case io::ReadEnd::end_of_file: errno = EIO; io::fail(path_, "sorted run shorter than written");
     }
+    off_ += n * sizeof(Rec);
     left_ -= n;
     n_ = n;
     pos_ = 0;
@@ -426,7 +391,7 @@ class RunReader {
   }
   std::string path_;
   int fd_ = -1;
-  std::uint64_t left_;
+  std::uint64_t left_, off_ = 0;
   std::vector<Rec> buf_;
   std::size_t pos_ = 0, n_ = 0;
 };
@@ -831,19 +796,7 @@ class Assembler {
     e.parent = parent;
     e.triangles = ph.ntris;
     e.nodes = ph.nnodes;
-    std::size_t written = 0;
-    while (written < out.size()) {
-      const ssize_t w = ::pwrite(fd_, out.data() + written, out.size() - written, off_t(off_ + written));
-      if (w < 0) {
-        if (errno == EINTR) continue;
-        io_fail(path_, "write failed");
-      }
-      if (w == 0) {
-        errno = ENOSPC;
-        io_fail(path_, "write failed");
-      }
-      written += std::size_t(w);
-    }
+    pwrite_all(fd_, path_, out.data(), out.size(), off_);
     off_ = (off_ + out.size() + kPageAlign - 1) / kPageAlign * kPageAlign;
     dir.push_back(e);
     for (std::uint32_t k : tops) top[k].index = id;
@@ -994,24 +947,6 @@ struct OutFile {
   }
 };
 
-void pwrite_all(int fd, const std::string& path, const void* data, std::size_t n, std::uint64_t off) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  while (n > 0) {
-    const ssize_t w = ::pwrite(fd, p, n, off_t(off));
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      io_fail(path, "write failed");
-    }
-    if (w == 0) {
-      errno = ENOSPC;
-      io_fail(path, "write failed");
-    }
-    p += w;
-    n -= std::size_t(w);
-    off += std::uint64_t(w);
-  }
-}
-
 }  // namespace
 
 ExtBuildReport build_store_external(TriangleSource& src, const std::string& path, const ExtBuildOptions& opt) {
@@ -1126,14 +1061,14 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     rf.path = opt.tmp_dir + "/run-" + std::to_string(runs.size()) + ".bin";
     run_files.paths.push_back(rf.path);
     const int fd = ::open(rf.path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0600);
-    if (fd < 0) io_fail(rf.path, "cannot create a temporary file");
+    if (fd < 0) io::fail(rf.path, "cannot create a temporary file");
     try {
-      write_all(fd, rf.path, run.data(), run.size() * sizeof(Rec));
+      pwrite_all(fd, rf.path, run.data(), run.size() * sizeof(Rec), 0);
     } catch (...) {
       ::close(fd);
       throw;
     }
-    if (::close(fd) != 0) io_fail(rf.path, "close failed");
+    if (::close(fd) != 0) io::fail(rf.path, "close failed");
     rf.records = run.size();
     R.spill_bytes += run.size() * sizeof(Rec);
     runs.push_back(rf);
@@ -1193,7 +1128,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const std::string tmp_path = path + ".tmp";
   out.path = tmp_path;
   out.fd = ::open(tmp_path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  if (out.fd < 0) io_fail(tmp_path, "cannot create");
+  if (out.fd < 0) io::fail(tmp_path, "cannot create");
   Assembler as(ctx, opt, out.fd, tmp_path, kPageAlign);
   {
     std::vector<std::unique_ptr<RunReader>> readers;
@@ -1494,17 +1429,17 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const std::string info = opt.info_json ? opt.info_json(R) : std::string("{}");
   section(info.data(), info.size(), &h.info);
   h.file_size = h.info.offset + h.info.size;
-  if (::ftruncate(out.fd, off_t(h.file_size)) != 0) io_fail(tmp_path, "truncate failed");
+  if (::ftruncate(out.fd, off_t(h.file_size)) != 0) io::fail(tmp_path, "truncate failed");
   h.header_crc = 0;
   h.header_crc = crc32c(&h, sizeof h);
   pwrite_all(out.fd, tmp_path, &h, sizeof h, 0);
   R.file_bytes = h.file_size;
   check();
-  if (::fsync(out.fd) != 0) io_fail(tmp_path, "fsync failed");
+  if (::fsync(out.fd) != 0) io::fail(tmp_path, "fsync failed");
   const int fd = out.fd;
   out.fd = -1;
-  if (::close(fd) != 0) io_fail(tmp_path, "close failed");
-  if (::rename(tmp_path.c_str(), path.c_str()) != 0) io_fail(path, "rename failed");
+  if (::close(fd) != 0) io::fail(tmp_path, "close failed");
+  if (::rename(tmp_path.c_str(), path.c_str()) != 0) io::fail(path, "rename failed");
   out.keep = true;
   {  // make the rename durable
     const auto slash = path.find_last_of('/');

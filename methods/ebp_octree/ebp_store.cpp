@@ -3,6 +3,7 @@
 // file is checked before it is used as a size, an offset or an index. See ebp_store.hpp and
 // OUT_OF_CORE.md.
 #include "ebp_store.hpp"
+#include "ebp_io.hpp"
 #include "leaf_blocks.hpp"
 
 #include <fcntl.h>
@@ -99,28 +100,6 @@ struct Fd {
     if (fd >= 0) ::close(fd);
   }
 };
-
-[[noreturn]] void io_fail(const std::string& path, const std::string& what) {
-  throw std::runtime_error(path + ": " + what + ": " + std::strerror(errno));
-}
-
-void pwrite_all(const Fd& f, const void* data, std::size_t n, std::uint64_t off) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  while (n > 0) {
-    const ssize_t w = ::pwrite(f.fd, p, n, off_t(off));
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      io_fail(f.path, "write failed");
-    }
-    if (w == 0) {
-      errno = ENOSPC;
-      io_fail(f.path, "write failed");
-    }
-    p += w;
-    n -= std::size_t(w);
-    off += std::uint64_t(w);
-  }
-}
 
 /// The cut of the tree into a pinned top and pages (subtrees packed by parent).
 struct PageSpec {
@@ -303,7 +282,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
   Fd f;
   f.path = path;
   f.fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  if (f.fd < 0) io_fail(path, "cannot create");
+  if (f.fd < 0) io::fail(path, "cannot create");
 
   FileHeader h{};
   std::memcpy(h.magic, kStoreMagic, 8);
@@ -337,7 +316,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
     s->offset = off;
     s->size = n;
     s->crc = crc32c(data, n);
-    if (n) pwrite_all(f, data, n, off);
+    if (n) io::pwrite_all(f.fd, f.path, data, n, off);
     off = align_up(off + n, 8);
   };
   section(P.top.data(), P.top.size() * sizeof(TopNode), &h.top_nodes);
@@ -353,7 +332,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
     PageEntry& e = dir[id];
     const std::vector<std::uint8_t> blob = serialise_page(t, P.pages[id], id, &e);
     e.offset = off;
-    pwrite_all(f, blob.data(), blob.size(), off);
+    io::pwrite_all(f.fd, f.path, blob.data(), blob.size(), off);
     off = align_up(off + blob.size(), kPageAlign);
     if (opt.progress) opt.progress(double(id + 1) / double(P.pages.size()));
   }
@@ -361,14 +340,14 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
   h.pages.crc = 0;  // each page has its own checksum (in the directory)
   section(dir.data(), dir.size() * sizeof(PageEntry), &h.directory);
   h.file_size = h.directory.offset + h.directory.size;
-  if (::ftruncate(f.fd, off_t(h.file_size)) != 0) io_fail(path, "truncate failed");
+  if (::ftruncate(f.fd, off_t(h.file_size)) != 0) io::fail(path, "truncate failed");
   h.header_crc = 0;
   h.header_crc = crc32c(&h, sizeof h);
-  pwrite_all(f, &h, sizeof h, 0);
-  if (::fsync(f.fd) != 0) io_fail(path, "fsync failed");
+  io::pwrite_all(f.fd, f.path, &h, sizeof h, 0);
+  if (::fsync(f.fd) != 0) io::fail(path, "fsync failed");
   if (::close(f.fd) != 0) {
     f.fd = -1;
-    io_fail(path, "close failed");
+    io::fail(path, "close failed");
   }
   f.fd = -1;
 }
@@ -377,7 +356,7 @@ void write_store_atomic(const Octree& t, const std::string& path, const StoreWri
   const std::string tmp = path + ".tmp";
   try {
     write_store(t, tmp, opt);
-    if (::rename(tmp.c_str(), path.c_str()) != 0) io_fail(path, "rename failed");
+    if (::rename(tmp.c_str(), path.c_str()) != 0) io::fail(path, "rename failed");
   } catch (...) {
     ::unlink(tmp.c_str());
     throw;
@@ -437,17 +416,10 @@ void StoreReader::read_at(std::uint64_t off, void* dst, std::size_t n) const {
     if (n) std::memcpy(dst, mem_.data() + off, n);
     return;
   }
-  auto* p = static_cast<std::uint8_t*>(dst);
-  while (n > 0) {
-    const ssize_t r = ::pread(fd_, p, n, off_t(off));
-    if (r < 0) {
-      if (errno == EINTR) continue;
-      fail(std::string("read failed: ") + std::strerror(errno));
-    }
-    if (r == 0) fail("unexpected end of file (truncated while open?)");
-    p += r;
-    n -= std::size_t(r);
-    off += std::uint64_t(r);
+  switch (io::pread_full(fd_, dst, n, off)) {
+    case io::ReadEnd::complete: return;
+    case io::ReadEnd::error: fail(std::string("read failed: ") + std::strerror(errno));
+    case io::ReadEnd::end_of_file: fail("unexpected end of file (truncated while open?)");
   }
 }
 
