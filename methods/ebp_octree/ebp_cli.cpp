@@ -166,6 +166,51 @@ std::map<std::string, std::string> parse_kv(const std::vector<std::string>& kvs)
   return given;
 }
 
+/// The store's info section (`ebp info`, the method's mesh check), the same for both builds;
+/// each adds what only it knows.
+nlohmann::json store_info(const std::string& mesh_path, const std::string& sha256, const ebp::Stats& s,
+                          const Params& p, int threads) {
+  nlohmann::json info;
+  info["mesh"] = mesh_path;
+  info["mesh_sha256"] = sha256;
+  info["triangles"] = s.triangles;
+  info["params"] = p.values();
+  info["threads"] = threads;
+  info["leaf_level"] = s.leaf_level;
+  info["leaf_size"] = s.leaf_size;
+  info["average_edge"] = s.average_edge;
+  info["nodes_per_level"] = s.nodes_per_level;
+  info["leaf_configurations"] = {{"convex", s.convex}, {"concave", s.concave}, {"special", s.special}};
+  info["max_refs_per_leaf"] = s.max_refs_per_leaf;
+  info["build_seconds"] = s.build_seconds;
+  return info;
+}
+
+/// What both builds report when the store is written: the JSON summary (--json) or its first line.
+struct WriteSummary {
+  std::string out;
+  std::uint64_t triangles = 0, pages = 0, bytes = 0, peak_rss = 0;
+  double build_s = 0, total_s = 0, budget = 0;
+  int threads = 1;
+  nlohmann::json json() const {
+    return {{"out", out},
+            {"triangles", triangles},
+            {"pages", pages},
+            {"bytes", bytes},
+            {"build_seconds", build_s},
+            {"total_seconds", total_s},
+            {"triangles_per_second", double(triangles) / total_s},
+            {"peak_rss_bytes", peak_rss},
+            {"memory_budget_bytes", budget},
+            {"within_budget", double(peak_rss) <= budget}};
+  }
+  void print_wrote() const {
+    std::printf("wrote %s: %lu triangles, %lu pages, %.1f MiB in %.1f s (%.0f triangles/s, %d threads)\n",
+                out.c_str(), (unsigned long)triangles, (unsigned long)pages, double(bytes) / 1048576.0, total_s,
+                double(triangles) / total_s, threads);
+  }
+};
+
 void add_build_command(CLI::App& ebp_cmd) {
   struct Opts {
     std::string mesh, out, tmp;
@@ -225,20 +270,8 @@ void add_build_command(CLI::App& ebp_cmd) {
       const std::string mesh_path = o->mesh;
       const bool streaming = src->streaming();
       eo.info_json = [&](const ebp::ExtBuildReport& r) {
-        nlohmann::json info;
         const ebp::Stats& s = r.stats;
-        info["mesh"] = mesh_path;
-        info["mesh_sha256"] = src->sha256();
-        info["triangles"] = s.triangles;
-        info["params"] = p.values();
-        info["threads"] = o->threads;
-        info["leaf_level"] = s.leaf_level;
-        info["leaf_size"] = s.leaf_size;
-        info["average_edge"] = s.average_edge;
-        info["nodes_per_level"] = s.nodes_per_level;
-        info["leaf_configurations"] = {{"convex", s.convex}, {"concave", s.concave}, {"special", s.special}};
-        info["max_refs_per_leaf"] = s.max_refs_per_leaf;
-        info["build_seconds"] = s.build_seconds;
+        nlohmann::json info = store_info(mesh_path, src->sha256(), s, p, o->threads);
         info["build"] = {{"kind", "external"}, {"memory_budget_bytes", budget}, {"runs", r.runs},
                          {"spill_bytes", r.spill_bytes}, {"records", r.records}, {"streamed_mesh", streaming},
                          {"colour_fallbacks", s.colour_fallbacks}, {"degenerate_edges", s.degenerate_edges}};
@@ -265,31 +298,21 @@ void add_build_command(CLI::App& ebp_cmd) {
       prog.finish();
       const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const std::uint64_t peak = peak_rss_bytes();
-      const std::uint64_t ntri = rep.stats.triangles;
-      nlohmann::json j{{"out", out.string()},
-                       {"triangles", ntri},
-                       {"pages", rep.pages},
-                       {"bytes", rep.file_bytes},
-                       {"build_seconds", rep.seconds_total},
-                       {"total_seconds", total_s},
-                       {"triangles_per_second", double(ntri) / total_s},
-                       {"peak_rss_bytes", peak},
-                       {"memory_budget_bytes", budget},
-                       {"within_budget", double(peak) <= budget},
-                       {"runs", rep.runs},
-                       {"spill_bytes", rep.spill_bytes},
-                       {"records", rep.records},
-                       {"skeleton_bytes", rep.skeleton_bytes},
-                       {"min_budget_bytes", rep.min_budget_bytes},
-                       {"streamed_mesh", streaming},
-                       {"seconds", {{"frame", rep.seconds_frame}, {"distribute", rep.seconds_distribute},
-                                    {"merge_build", rep.seconds_merge_build}, {"colour", rep.seconds_colour}}}};
+      const WriteSummary sum{out.string(), rep.stats.triangles, rep.pages, rep.file_bytes, peak,
+                             rep.seconds_total, total_s, budget, o->threads};
+      nlohmann::json j = sum.json();
+      j["runs"] = rep.runs;
+      j["spill_bytes"] = rep.spill_bytes;
+      j["records"] = rep.records;
+      j["skeleton_bytes"] = rep.skeleton_bytes;
+      j["min_budget_bytes"] = rep.min_budget_bytes;
+      j["streamed_mesh"] = streaming;
+      j["seconds"] = {{"frame", rep.seconds_frame}, {"distribute", rep.seconds_distribute},
+                      {"merge_build", rep.seconds_merge_build}, {"colour", rep.seconds_colour}};
       if (o->json) {
         std::cout << j.dump(2) << "\n";
       } else {
-        std::printf("wrote %s: %lu triangles, %lu pages, %.1f MiB in %.1f s (%.0f triangles/s, %d threads)\n",
-                    out.c_str(), (unsigned long)ntri, (unsigned long)rep.pages, double(rep.file_bytes) / 1048576.0,
-                    total_s, double(ntri) / total_s, o->threads);
+        sum.print_wrote();
         std::printf("external build: %lu sorted run(s), %.1f MiB spilled; frame %.1f s, distribution %.1f s, "
                     "merge+build %.1f s, colouring %.1f s\n",
                     (unsigned long)rep.runs, double(rep.spill_bytes) / 1048576.0, rep.seconds_frame,
@@ -328,21 +351,8 @@ void add_build_command(CLI::App& ebp_cmd) {
     std::vector<std::array<std::uint32_t, 3>>().swap(mesh.triangles);
     SignalGuard::check();
 
-    nlohmann::json info;
-    const ebp::Stats& s = tree.stats;
-    info["mesh"] = mesh_path;
-    info["mesh_sha256"] = sha;
-    info["triangles"] = ntri;
-    info["params"] = p.values();
-    info["threads"] = o->threads;
-    info["leaf_level"] = s.leaf_level;
-    info["leaf_size"] = s.leaf_size;
-    info["average_edge"] = s.average_edge;
-    info["nodes_per_level"] = s.nodes_per_level;
-    info["leaf_configurations"] = {{"convex", s.convex}, {"concave", s.concave}, {"special", s.special}};
-    info["max_refs_per_leaf"] = s.max_refs_per_leaf;
+    nlohmann::json info = store_info(mesh_path, sha, tree.stats, p, o->threads);
     info["tree_bytes"] = tree.bytes();
-    info["build_seconds"] = s.build_seconds;
 
     ebp::StoreWriteOptions wo;
     wo.page_target = std::size_t(o->page_kb) * 1024;
@@ -366,22 +376,11 @@ void add_build_command(CLI::App& ebp_cmd) {
     const std::uint64_t peak = peak_rss_bytes();
     const ebp::StoreReader check(out.string());
     const ebp::FileHeader& h = check.header();
-    nlohmann::json j{{"out", out.string()},
-                     {"triangles", ntri},
-                     {"pages", h.num_pages},
-                     {"bytes", h.file_size},
-                     {"build_seconds", build_s},
-                     {"total_seconds", total_s},
-                     {"triangles_per_second", double(ntri) / total_s},
-                     {"peak_rss_bytes", peak},
-                     {"memory_budget_bytes", budget},
-                     {"within_budget", double(peak) <= budget}};
+    const WriteSummary sum{out.string(), ntri, h.num_pages, h.file_size, peak, build_s, total_s, budget, o->threads};
     if (o->json) {
-      std::cout << j.dump(2) << "\n";
+      std::cout << sum.json().dump(2) << "\n";
     } else {
-      std::printf("wrote %s: %zu triangles, %lu pages, %.1f MiB in %.1f s (%.0f triangles/s, %d threads)\n",
-                  out.c_str(), ntri, (unsigned long)h.num_pages, double(h.file_size) / 1048576.0, total_s,
-                  double(ntri) / total_s, o->threads);
+      sum.print_wrote();
       std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
                   double(peak) <= budget ? "" : " (EXCEEDED: the tree is built in memory, see OUT_OF_CORE.md)");
     }
