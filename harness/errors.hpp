@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "printable.hpp"
+
 namespace bvhbench {
 
 /// Bad input: a malformed file (mesh, query set, structure file) or a bad value given by the
@@ -19,9 +21,11 @@ struct UnsupportedError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Formats "FILE: problem" the way every reader reports errors.
+/// Formats "FILE: problem" the way every reader reports errors. Both parts go through
+/// printable(): a path or a quoted token may hold bytes that are not UTF-8, and the message ends
+/// up in a result JSON.
 inline InputError file_error(const std::string& path, const std::string& problem) {
-  return InputError(path + ": " + problem);
+  return InputError(printable(path + ": " + problem));
 }
 
 }  // namespace bvhbench

@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "errors.hpp"
+#include "printable.hpp"
 #include "progress.hpp"
 #include "registry.hpp"
 
@@ -28,7 +29,7 @@ int main(int argc, char** argv) {
     add_compare_command(app);
     for (auto& c : Registry::global().commands()) c.setup(app);
   } catch (const std::exception& e) {
-    std::cerr << "bvhbench: internal error while setting up commands: " << e.what() << "\n";
+    std::cerr << "bvhbench: internal error while setting up commands: " << printable(e.what()) << "\n";
     return 3;
   }
 
@@ -42,16 +43,16 @@ int main(int argc, char** argv) {
   } catch (const ExitCode& e) {
     return e.code;
   } catch (const InputError& e) {
-    std::cerr << "bvhbench: " << e.what() << "\n";
+    std::cerr << "bvhbench: " << printable(e.what()) << "\n";
     return 2;
   } catch (const UnsupportedError& e) {
-    std::cerr << "bvhbench: unsupported: " << e.what() << "\n";
+    std::cerr << "bvhbench: unsupported: " << printable(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "bvhbench: out of memory\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "bvhbench: error: " << e.what() << "\n";
+    std::cerr << "bvhbench: error: " << printable(e.what()) << "\n";
     return 1;
   }
   return 0;

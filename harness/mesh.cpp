@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "errors.hpp"
+#include "printable.hpp"
 #include "progress.hpp"
 #include "sha256.hpp"
 
@@ -56,14 +57,6 @@ namespace {
 constexpr std::size_t kChunk = std::size_t(8) << 20;
 constexpr std::size_t kMaxLine = std::size_t(64) << 20;
 constexpr bool kBigEndianHost = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
-
-std::string quoted(std::string_view s) {
-  constexpr std::size_t kMax = 40;
-  std::string out = "'";
-  for (char c : s.substr(0, kMax)) out += (static_cast<unsigned char>(c) < 32 || c == 127) ? '?' : c;
-  if (s.size() > kMax) out += "...";
-  return out + "'";
-}
 
 // ---------------------------------------------------------------------------------------------
 // The file, read through one buffer and hashed on the way.
@@ -405,14 +398,14 @@ class PlyReader {
         else if (f == "binary_big_endian")
           format_ = PlyFormat::binary_be;
         else
-          throw error(where() + "unknown PLY format " + quoted(f));
+          throw error(where() + "unknown PLY format " + quoted_excerpt(f));
         have_format = true;
       } else if (kw == "element") {
         PlyElement el;
         el.name = std::string(next_token(rest));
         long long count = -1;
         if (el.name.empty() || !parse_int(next_token(rest), count) || count < 0)
-          throw error(where() + "bad element line " + quoted(ln));
+          throw error(where() + "bad element line " + quoted_excerpt(ln));
         el.count = std::uint64_t(count);
         elements_.push_back(std::move(el));
       } else if (kw == "property") {
@@ -422,15 +415,15 @@ class PlyReader {
         if (t == "list") {
           prop.list = true;
           if (!ply_type(next_token(rest), prop.count_type) || !is_integer(prop.count_type))
-            throw error(where() + "bad list count type in " + quoted(ln));
+            throw error(where() + "bad list count type in " + quoted_excerpt(ln));
           t = next_token(rest);
         }
-        if (!ply_type(t, prop.type)) throw error(where() + "unknown property type " + quoted(t));
+        if (!ply_type(t, prop.type)) throw error(where() + "unknown property type " + quoted_excerpt(t));
         prop.name = std::string(next_token(rest));
         if (prop.name.empty()) throw error(where() + "property without a name");
         elements_.back().props.push_back(std::move(prop));
       } else {
-        throw error(where() + "unexpected header line " + quoted(ln));
+        throw error(where() + "unexpected header line " + quoted_excerpt(ln));
       }
     }
     if (!have_format) throw error("PLY header has no 'format' line");
@@ -689,7 +682,7 @@ class PlyReader {
           const std::string_view tok = next_token(ln);
           if (tok.empty()) throw too_few();
           double d;
-          if (!parse_double(tok, d)) throw error(where() + quoted(tok) + " is not a number");
+          if (!parse_double(tok, d)) throw error(where() + quoted_excerpt(tok) + " is not a number");
           // Values take their declared type, so that ASCII and binary files of the same mesh
           // read the same coordinates.
           if (prop.type == PlyType::f32) d = double(float(d));
@@ -701,7 +694,7 @@ class PlyReader {
         std::string_view tok = next_token(ln);
         if (tok.empty()) throw too_few();
         long long n;
-        if (!parse_int(tok, n) || n < 0) throw error(where() + quoted(tok) + " is not a list length");
+        if (!parse_int(tok, n) || n < 0) throw error(where() + quoted_excerpt(tok) + " is not a list length");
         const bool wanted = is_face && int(k) == el.indices;
         if (wanted) scratch_.clear();
         for (long long j = 0; j < n; ++j) {
@@ -709,18 +702,18 @@ class PlyReader {
           if (tok.empty()) throw too_few();
           if (wanted) {
             long long idx;
-            if (!parse_int(tok, idx)) throw error(where() + quoted(tok) + " is not a vertex index");
+            if (!parse_int(tok, idx)) throw error(where() + quoted_excerpt(tok) + " is not a vertex index");
             if (idx < 0 || std::uint64_t(idx) >= nverts_) bad_index(i, idx);
             scratch_.push_back(std::uint32_t(idx));
           } else {
             double d;
-            if (!parse_double(tok, d)) throw error(where() + quoted(tok) + " is not a number");
+            if (!parse_double(tok, d)) throw error(where() + quoted_excerpt(tok) + " is not a number");
           }
         }
         if (wanted) add_polygon(i);
       }
       if (!strip(ln).empty())
-        throw error(where() + "more values than the header declares (" + quoted(strip(ln)) + " left over)");
+        throw error(where() + "more values than the header declares (" + quoted_excerpt(strip(ln)) + " left over)");
       if (is_vertex) {
         mesh_.vertices[std::size_t(i)] = v;
         if (!finite3(v.x, v.y, v.z)) bad_vertex(i, v);
@@ -777,7 +770,7 @@ class ObjReader {
           if (tok.empty())
             throw error(where() + "vertex " + std::to_string(mesh_.vertices.size() + 1) + " has " +
                         std::to_string(k) + " coordinates, expected 3");
-          if (!parse_double(tok, c[k])) throw error(where() + quoted(tok) + " is not a number");
+          if (!parse_double(tok, c[k])) throw error(where() + quoted_excerpt(tok) + " is not a number");
         }
         if (!finite3(c[0], c[1], c[2]))
           throw error(where() + "vertex " + std::to_string(mesh_.vertices.size() + 1) + " has " +
@@ -791,7 +784,7 @@ class ObjReader {
         for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
           const std::string_view head = tok.substr(0, tok.find('/'));
           long long idx;
-          if (!parse_int(head, idx)) throw error(where() + quoted(tok) + " is not a vertex reference");
+          if (!parse_int(head, idx)) throw error(where() + quoted_excerpt(tok) + " is not a vertex reference");
           raw.push_back(idx);
         }
         if (raw.size() < 3)

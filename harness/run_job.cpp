@@ -19,6 +19,7 @@
 #include "commands.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "printable.hpp"
 #include "progress.hpp"
 #include "query_set.hpp"
 #include "registry.hpp"
@@ -29,12 +30,18 @@ namespace bvhbench {
 using Clock = std::chrono::steady_clock;
 using json = nlohmann::json;
 
+std::string dump_result(const json& j) {
+  // Strings are made printable where they enter a result; `replace` is the last guard, so that a
+  // byte that slipped through costs one U+FFFD, not the result file.
+  return j.dump(2, ' ', false, json::error_handler_t::replace);
+}
+
 void write_json_atomic(const std::string& path, const json& j) {
   std::string tmp = path + ".tmp";
   {
     std::ofstream f(tmp);
     if (!f) throw file_error(path, "cannot open for writing");
-    f << j.dump(2) << "\n";
+    f << dump_result(j) << "\n";
     f.flush();
     if (!f) throw file_error(path, "write failed (disk full?)");
   }
@@ -53,9 +60,11 @@ json job_block(const JobSpec& spec) {
   } catch (...) {
     name = spec.method_spec;
   }
-  j["method"] = name;
-  j["method_spec"] = spec.method_spec;
-  j["params"] = given;
+  j["method"] = printable(name);
+  j["method_spec"] = printable(spec.method_spec);
+  json given_json = json::object();
+  for (const auto& [k, v] : given) given_json[printable(k)] = printable(v);
+  j["params"] = given_json;
   j["params_key"] = "";
   // Resolve the parameters when the method is known, so that status rows written without running
   // the job (a crash, a query set that could not be made) pair and group like the job's own rows.
@@ -68,11 +77,12 @@ json job_block(const JobSpec& spec) {
     }
   }
   j["query"] = to_string(spec.query_type);
-  j["mesh"] = {{"path", spec.mesh_path}};
-  j["queries"] = {{"path", spec.queries_path}};
+  // Paths are the user's bytes (a Linux file name need not be UTF-8); JSON needs UTF-8.
+  j["mesh"] = {{"path", printable(spec.mesh_path)}};
+  j["queries"] = {{"path", printable(spec.queries_path)}};
   j["repetitions"] = spec.repeat;
   j["threads"] = spec.threads;
-  j["truth"] = spec.truth_path.empty() ? json(nullptr) : json(spec.truth_path);
+  j["truth"] = spec.truth_path.empty() ? json(nullptr) : json(printable(spec.truth_path));
   return j;
 }
 
@@ -82,7 +92,7 @@ json make_result(const JobSpec& spec, const std::string& status_code, const std:
   r["context"] = run_context();
   r["job"] = job_block(spec);
   r["status"] = status_code;
-  r["message"] = message;
+  r["message"] = printable(message);
   r["accuracy"] = nullptr;
   return r;
 }
@@ -132,7 +142,7 @@ json run_job(const JobSpec& spec) {
   json r = make_result(spec, status::ok, "");
   auto fail = [&](const char* code, const std::string& msg) {
     r["status"] = code;
-    r["message"] = msg;
+    r["message"] = printable(msg);  // a library's or a reader's text may not be UTF-8
   };
   try {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
@@ -146,7 +156,7 @@ json run_job(const JobSpec& spec) {
     r["context"] = run_context();  // registration may have noted library versions
 
     QuerySet qs = load_query_set(spec.queries_path);
-    r["job"]["queries"] = {{"path", qs.path},
+    r["job"]["queries"] = {{"path", printable(qs.path)},
                            {"sha256", qs.sha256},
                            {"kind", qs.kind()},
                            {"n", qs.points.size()},
@@ -168,7 +178,7 @@ json run_job(const JobSpec& spec) {
     const Box3d bounds = mesh.bounds();
     const double diagonal = bounds.diagonal();
     const std::string mesh_sha256 = mesh.sha256;  // the mesh itself is released after build
-    r["job"]["mesh"] = {{"path", mesh.path},
+    r["job"]["mesh"] = {{"path", printable(mesh.path)},
                         {"sha256", mesh.sha256},
                         {"triangles", mesh.num_triangles()},
                         {"vertices", mesh.vertices.size()},
@@ -333,7 +343,7 @@ void add_run_command(CLI::App& app) {
     spec->memory_budget_bytes = std::size_t(*budget_mb * 1024 * 1024);
     spec->progress = !*quiet;
     json r = run_job(*spec);
-    if (out->empty()) std::cout << r.dump(2) << std::endl;
+    if (out->empty()) std::cout << dump_result(r) << std::endl;
     else write_json_atomic(*out, r);
     std::string st = r["status"];
     if (st != status::ok) {

@@ -48,7 +48,11 @@ nlohmann::json job_block(const JobSpec& spec);
 nlohmann::json make_result(const JobSpec& spec, const std::string& status_code,
                            const std::string& message);
 
-/// Writes JSON to path atomically (PATH.tmp then rename), pretty-printed.
+/// JSON text of a result, pretty-printed; bytes that are not UTF-8 become U+FFFD instead of an
+/// exception (messages and paths are made printable() before they get there).
+std::string dump_result(const nlohmann::json& j);
+
+/// Writes JSON to path atomically (PATH.tmp then rename), pretty-printed (dump_result).
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
 }  // namespace bvhbench
