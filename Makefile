@@ -3,7 +3,11 @@
 #   make test    install what is missing, build, run every C++ and Python test and the CI regression gate
 
 SHELL       := /bin/bash
+# Python: every Python step runs in the project's virtual environment $(VENV), made from $(PYTHON)
+# by tools/python_env.sh (Debian's python3 refuses pip installs into the system, PEP 668).
 PYTHON      ?= python3
+VENV        ?= .venv
+VPY         := $(VENV)/bin/python
 BUILD_DIR   ?= build
 BUILD_TYPE  ?= Release
 JOBS        ?= $(shell nproc)
@@ -12,16 +16,17 @@ BVHBENCH    := $(BUILD_DIR)/bvhbench
 SUDO        := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 # Debian 12 packages the build needs (checked one by one; only the missing ones are installed).
-APT_PACKAGES := cmake ninja-build g++ make pkg-config git \
+# python3-venv: Debian's python3 makes virtual environments only with it.
+APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
-  libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev
+  libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev
 
-.PHONY: help deps build test test-cpp test-python gate bench data stability large paper rebaseline report clean
+.PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper rebaseline report clean distclean
 
 help:
 	@echo "make bench      - install, build, make default data, run the default suite, write results/default/report/"
 	@echo "make test       - install, build, run C++ (ctest) and Python (pytest) tests, then the CI regression gate"
-	@echo "make deps       - install missing Debian and Python packages (idempotent, quiet when all present)"
+	@echo "make deps       - install missing Debian packages, and Python packages into $(VENV)/ (idempotent, quiet when all present)"
 	@echo "make build      - configure and build $(BVHBENCH) ($(BUILD_TYPE))"
 	@echo "make stability  - the stability suite: every method on every stress mesh"
 	@echo "make large      - every method on a closed 4M-triangle model (about 15 minutes)"
@@ -36,11 +41,11 @@ deps:
 	  $(SUDO) apt-get update -qq && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
 	fi
-	@missing=$$($(PYTHON) tools/pydeps.py --missing); \
-	if [ -n "$$missing" ]; then \
-	  echo "deps: installing Python packages:" $$missing; \
-	  $(PYTHON) -m pip install -q --disable-pip-version-check $$missing || exit 1; \
-	fi
+	@tools/python_env.sh --python $(PYTHON) --venv $(VENV)
+
+# The Python environment alone (for the Python-only targets run by hand).
+venv:
+	@tools/python_env.sh --python $(PYTHON) --venv $(VENV)
 
 $(BUILD_DIR)/build.ninja:
 	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_ARGS)
@@ -50,50 +55,51 @@ build: deps $(BUILD_DIR)/build.ninja
 
 test: build test-cpp test-python gate
 
+# The venv's bin/ comes first on PATH, so that a C++ test that checks its files with NumPy finds it.
 test-cpp:
-	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
+	PATH=$(abspath $(VENV))/bin:$$PATH ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
 
 test-python:
-	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(PYTHON) -m pytest tests/python
+	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(VPY) -m pytest tests/python
 
 # CI regression gate: counters, accuracy and statuses against results/baseline/ (timings reported only).
 gate:
-	@if [ -x tools/ci_gate.sh ]; then BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh; \
+	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh; \
 	 else echo "gate: tools/ci_gate.sh not present yet; skipped"; fi
 
 data: deps
-	$(PYTHON) datasets-scripts/make_datasets.py --preset default
+	$(VPY) datasets-scripts/make_datasets.py --preset default
 
-report:
-	$(PYTHON) plots/report.py results/default
+report: venv
+	$(VPY) plots/report.py results/default
 
 bench: build data
 	$(BVHBENCH) suite suites/default.yml --out results/default --resume
-	$(PYTHON) plots/report.py results/default
+	$(VPY) plots/report.py results/default
 	@echo "report: results/default/report/report.md"
 
 stability: build
-	$(PYTHON) datasets-scripts/make_datasets.py --preset stability
+	$(VPY) datasets-scripts/make_datasets.py --preset stability
 	$(BVHBENCH) suite suites/stability.yml --out results/stability --resume
-	$(PYTHON) tools/stability_matrix.py results/stability
-	$(PYTHON) plots/report.py results/stability
+	$(VPY) tools/stability_matrix.py results/stability
+	$(VPY) plots/report.py results/stability
 
 large: build
-	$(PYTHON) datasets-scripts/make_datasets.py --preset large
+	$(VPY) datasets-scripts/make_datasets.py --preset large
 	$(BVHBENCH) suite suites/large.yml --out results/large --resume
-	$(PYTHON) plots/report.py results/large
+	$(VPY) plots/report.py results/large
 
 PAPER_MODELS := bunny_closed_32m scan_like_32m
 
 paper: build
-	$(PYTHON) datasets-scripts/make_datasets.py --preset paper
+	$(VPY) datasets-scripts/make_datasets.py --preset paper
 	@for m in $(PAPER_MODELS); do \
 	  if [ ! -f data/paper/$$m.ebp ] || [ data/paper/$$m.ply -nt data/paper/$$m.ebp ]; then \
 	    $(BVHBENCH) ebp build --mesh data/paper/$$m.ply --out data/paper/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
 	  fi; \
 	done
 	$(BVHBENCH) suite suites/paper.yml --out results/paper --resume
-	$(PYTHON) plots/report.py results/paper
+	$(VPY) plots/report.py results/paper
 
 rebaseline: build
 	@if [ -x tools/ci_gate.sh ]; then BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
@@ -101,3 +107,7 @@ rebaseline: build
 
 clean:
 	rm -rf $(BUILD_DIR)
+
+# The Python environment too (made again by the next `make deps`).
+distclean: clean
+	rm -rf $(VENV)

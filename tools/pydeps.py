@@ -6,15 +6,28 @@ Used by `make deps` so that pip runs only when something is missing. Standard li
 import argparse
 import re
 import sys
-import tomllib
 from importlib import metadata
 from pathlib import Path
+
+try:
+    import tomllib  # Python 3.11+
+except ModuleNotFoundError:  # an older interpreter: read the two lists this file needs by hand
+    tomllib = None
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def _string_list(text, key):
+    """The strings of `key = [ ... ]` in pyproject.toml (a plain list of quoted strings)."""
+    m = re.search(r"^" + re.escape(key) + r"\s*=\s*\[(.*?)\]", text, re.S | re.M)
+    return re.findall(r'"([^"]+)"', m.group(1)) if m else []
+
+
 def requirements():
-    data = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    text = (ROOT / "pyproject.toml").read_text()
+    if tomllib is None:
+        return _string_list(text, "dependencies") + _string_list(text, "test")
+    data = tomllib.loads(text)
     reqs = list(data["project"]["dependencies"])
     reqs += data["project"].get("optional-dependencies", {}).get("test", [])
     return reqs
