@@ -1,6 +1,6 @@
 // The ebp_octree method: the harness adapter over the EBP-Octree core (ebp_octree.hpp), its
 // registration, and the `bvhbench ebp ...` command group (`stats` now; the out-of-core store
-// adds `build` and `info` under the same group).
+// adds `build`, `info` and `verify` under the same group).
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -224,9 +224,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   r.add(std::move(m));
   // `bvhbench ebp <sub>`: one command group; later issues add subcommands in add_*_command.
   r.add_command({"ebp", [](CLI::App& app) {
-                   auto* ebp_cmd = app.add_subcommand("ebp", "EBP-Octree tools (stats; build/info for the on-disk store)");
+                   auto* ebp_cmd = app.add_subcommand("ebp", "EBP-Octree tools (stats; build/info/verify for the on-disk store)");
                    ebp_cmd->require_subcommand(1);
                    add_stats_command(*ebp_cmd);
-                   add_ebp_store_commands(*ebp_cmd);  // build, info: ebp_cli.cpp
+                   add_ebp_store_commands(*ebp_cmd);  // build, info, verify: ebp_cli.cpp
                  }});
 }
