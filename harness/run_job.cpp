@@ -18,6 +18,7 @@
 #include "calibration.hpp"
 #include "commands.hpp"
 #include "errors.hpp"
+#include "machine_fingerprint.hpp"
 #include "mesh.hpp"
 #include "printable.hpp"
 #include "progress.hpp"
@@ -233,6 +234,9 @@ json run_job(const JobSpec& spec) {
     for (const Counter& c : method->counters())
       counters[c.name] = n ? double(c.value) / double(n) : 0.0;
     r["counters"] = counters;
+    // Which of them only compare exactly on a like machine, and the machine they were counted on.
+    r["machine_dependent"] = {{"counters", info->machine_dependent_counters},
+                              {"fingerprint", machine_fingerprint(method->machine_facts())}};
     std::size_t query_rss = current_rss_bytes();
 
     r["calibration"] = measure_calibration();
