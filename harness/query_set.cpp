@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "commands.hpp"
+#include "correctly_rounded.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
 #include "npy.hpp"
@@ -107,11 +108,12 @@ double Rng::normal() {
   }
   double u1 = uniform(), u2 = uniform();
   if (u1 < 1e-300) u1 = 1e-300;
-  double r = std::sqrt(-2.0 * std::log(u1));
+  // Correctly rounded log/sin/cos: the same bits on every machine (correctly_rounded.hpp).
+  double r = std::sqrt(-2.0 * correctly_rounded::log(u1));
   double t = 6.283185307179586476925 * u2;
-  spare_ = r * std::sin(t);
+  spare_ = r * correctly_rounded::sin(t);
   has_spare_ = true;
-  return r * std::cos(t);
+  return r * correctly_rounded::cos(t);
 }
 
 std::uint64_t Rng::below(std::uint64_t n) {
