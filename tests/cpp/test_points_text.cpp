@@ -25,13 +25,6 @@ std::vector<Vec3d> read_text(const TmpDir& dir, const std::string& name, const s
   return read_points_text(path);
 }
 
-/// Writes `text` as NAME and expects read_points_text to refuse it naming the file and `problem`.
-void expect_refused(const TmpDir& dir, const std::string& name, const std::string& text, const std::string& problem) {
-  const std::string path = dir.file(name);
-  write_file_bytes(path, text);
-  expect_input_error([&] { read_points_text(path); }, path, problem);
-}
-
 }  // namespace
 
 TEST(PointsText, EveryLayoutGivesTheSamePoints) {
@@ -74,29 +67,38 @@ TEST(PointsText, SeventeenDigitsRoundTripBitIdentically) {
 }
 
 TEST(PointsText, EveryMalformedLineIsRefusedWithItsNumber) {
+  struct Case {
+    std::string name, text, problem;
+  };
+  const std::vector<Case> cases = {
+      {"two.xyz", "1 2 3\n4 5\n", "line 2: 2 values, but the first point (line 1) has 3"},
+      {"first_short.xyz", "# c\n1 2\n", "line 2: expected at least 3 values (x y z), found 2"},
+      {"more.xyz", "1 2 3\n4 5 6 7\n", "line 2: 4 values, but the first point (line 1) has 3"},
+      {"merged.xyz", "1 2 3 0 0 1\n4 5 6 0 0 1 7 8 9 0 0 1\n", "line 2: 12 values, but the first point (line 1) has 6"},
+      {"word.xyz", "1 2 3\n4 five 6\n", "line 2: 'five' in column 2 is not a number"},
+      {"mixed_first.xyz", "1.0 abc 2\n", "line 1: 'abc' in column 2 is not a number"},
+      {"junk.csv", "1,2,3x\n", "line 1: '3x' in column 3 is not a number"},
+      {"hex.csv", "x,y,z\n0x1p3,2,3\n", "line 2: '0x1p3' in column 1 is not a number"},
+      {"empty_field.csv", "1,2,3\n4,,6\n", "line 2: no value in column 2"},
+      {"trailing_comma_short.csv", "1,2,\n", "line 1: no value in column 3"},
+      {"semicolons.csv", "1;2;3\n4;5;6\n", "line 2: expected at least 3 values (x y z), found 1"},
+      {"one_semicolon_line.csv", "1;2;3\n", "no points after the header (line 1: '1;2;3')"},
+      {"nan.xyz", "1 2 3\n\n4 nan 6\n", "line 3: point 1 has a NaN coordinate"},
+      {"inf.csv", "x,y,z\n-inf,0,0\n", "line 2: point 0 has an infinite coordinate"},
+      {"overflow.xyz", "1 2 1e999\n", "line 1: point 0 has an infinite coordinate"},
+      {"second_header.csv", "x,y,z\nx,y,z\n", "line 2: 'x' in column 1 is not a number"},
+      {"not_utf8.xyz", "1 2 3\n4 5 \xff\n", "line 2: '\\xFF' in column 3 is not a number"},
+      {"long.xyz", "1 2 3\n" + std::string(70000, '1') + "\n", "line 2: longer than 65536 bytes"},
+      {"empty.xyz", "", "no points"},
+      {"only_comments.csv", "# nothing\n\n  \n", "no points"},
+      {"only_header.csv", "# c\nx,y,z\n", "no points after the header (line 2: 'x,y,z')"},
+  };
   TmpDir dir;
-  expect_refused(dir, "two.xyz", "1 2 3\n4 5\n", "line 2: 2 values, but the first point (line 1) has 3");
-  expect_refused(dir, "first_short.xyz", "# c\n1 2\n", "line 2: expected at least 3 values (x y z), found 2");
-  expect_refused(dir, "more.xyz", "1 2 3\n4 5 6 7\n", "line 2: 4 values, but the first point (line 1) has 3");
-  expect_refused(dir, "merged.xyz", "1 2 3 0 0 1\n4 5 6 0 0 1 7 8 9 0 0 1\n",
-                 "line 2: 12 values, but the first point (line 1) has 6");
-  expect_refused(dir, "word.xyz", "1 2 3\n4 five 6\n", "line 2: 'five' in column 2 is not a number");
-  expect_refused(dir, "mixed_first.xyz", "1.0 abc 2\n", "line 1: 'abc' in column 2 is not a number");
-  expect_refused(dir, "junk.csv", "1,2,3x\n", "line 1: '3x' in column 3 is not a number");
-  expect_refused(dir, "hex.csv", "x,y,z\n0x1p3,2,3\n", "line 2: '0x1p3' in column 1 is not a number");
-  expect_refused(dir, "empty_field.csv", "1,2,3\n4,,6\n", "line 2: no value in column 2");
-  expect_refused(dir, "trailing_comma_short.csv", "1,2,\n", "line 1: no value in column 3");
-  expect_refused(dir, "semicolons.csv", "1;2;3\n4;5;6\n", "line 2: expected at least 3 values (x y z), found 1");
-  expect_refused(dir, "one_semicolon_line.csv", "1;2;3\n", "no points after the header (line 1: '1;2;3')");
-  expect_refused(dir, "nan.xyz", "1 2 3\n\n4 nan 6\n", "line 3: point 1 has a NaN coordinate");
-  expect_refused(dir, "inf.csv", "x,y,z\n-inf,0,0\n", "line 2: point 0 has an infinite coordinate");
-  expect_refused(dir, "overflow.xyz", "1 2 1e999\n", "line 1: point 0 has an infinite coordinate");
-  expect_refused(dir, "second_header.csv", "x,y,z\nx,y,z\n", "line 2: 'x' in column 1 is not a number");
-  expect_refused(dir, "not_utf8.xyz", "1 2 3\n4 5 \xff\n", "line 2: '\\xFF' in column 3 is not a number");
-  expect_refused(dir, "long.xyz", "1 2 3\n" + std::string(70000, '1') + "\n", "line 2: longer than 65536 bytes");
-  expect_refused(dir, "empty.xyz", "", "no points");
-  expect_refused(dir, "only_comments.csv", "# nothing\n\n  \n", "no points");
-  expect_refused(dir, "only_header.csv", "# c\nx,y,z\n", "no points after the header (line 2: 'x,y,z')");
+  for (const Case& c : cases) {
+    const std::string path = dir.file(c.name);
+    write_file_bytes(path, c.text);
+    expect_input_error([&] { read_points_text(path); }, path, c.problem);
+  }
   expect_input_error([&] { read_points_text(dir.file("missing.xyz")); }, "missing.xyz", "not found");
 }
 
