@@ -34,7 +34,8 @@ class ZipReader {
   const std::string& path() const { return file_.path(); }
   const std::vector<ZipEntry>& entries() const { return entries_; }
 
-  /// The plain bytes of one entry, read in order.
+  /// The plain bytes of one entry, read in order. Reads through its ZipReader's file, so it is
+  /// valid only while that ZipReader lives.
   class EntryReader {
    public:
     ~EntryReader();
