@@ -331,7 +331,10 @@ void add_run_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "Run one job: build one method on one mesh, replay one query set");
   cmd->add_option("--mesh", spec->mesh_path, "Mesh (PLY or OBJ)")->required();
   cmd->add_option("--method", spec->method_spec, "NAME or NAME:key=value,...")->required();
-  cmd->add_option("--queries", spec->queries_path, "Query set .npy (with its .json sidecar)")->required();
+  cmd->add_option("--queries", spec->queries_path,
+                  "Query set: .npy from bvhbench queries (with its .json sidecar), or points made "
+                  "elsewhere: .npy (float64/float32, N x 3) or .xyz/.csv text, one point a line")
+      ->required();
   cmd->add_option("--query", *query, "inside | distance")->check(CLI::IsMember({"inside", "distance"}));
   cmd->add_option("--repeat", spec->repeat, "Timed passes after the warm-up")->check(CLI::Range(1, 1000));
   cmd->add_option("--threads", spec->threads, "Thread budget")->check(CLI::Range(1, 1024));
