@@ -168,6 +168,12 @@ json read_result_file(const std::string& file) {
   if (!f) throw file_error(file, "cannot read");
   std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (f.bad()) throw file_error(file, "read failed");
+  return parse_result(text, file);
+}
+
+}  // namespace
+
+json parse_result(const std::string& text, const std::string& file) {
   json r;
   try {
     r = json::parse(text);
@@ -177,8 +183,6 @@ json read_result_file(const std::string& file) {
   validate_result(file, r);
   return r;
 }
-
-}  // namespace
 
 ResultSet load_result_set(const std::string& path) {
   ResultSet set;

@@ -402,14 +402,14 @@ NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std:
   return a;
 }
 
-NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name) {
+NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name, NpyOrder order) {
   std::size_t at = 0;
   return read_npy_from(
       [&](void* out, std::size_t k) {
         std::memcpy(out, bytes + at, k);  // read_npy_from never asks for more than n in all
         at += k;
       },
-      n, name);
+      n, name, order);
 }
 
 NpyArray read_npy(const std::string& path, NpyOrder order) {
@@ -471,15 +471,23 @@ std::vector<Vec3d> points_of(const NpyArray& a, const std::string& path) {
   }
   return pts;
 }
-}  // namespace
 
-std::vector<Vec3d> read_points_npy(const std::string& path) {
-  const NpyArray a = read_npy(path, NpyOrder::c_or_fortran);
+/// The points of an array read with NpyOrder::c_or_fortran.
+std::vector<Vec3d> points_of_array(const NpyArray& a, const std::string& path) {
   const bool f8 = a.dtype == "<f8", f4 = a.dtype == "<f4";
   if (!(f8 || f4) || a.shape.size() != 2 || a.shape[1] != 3)
     throw file_error(path, "expected a float64 or float32 (N, 3) array of points, found dtype " + a.dtype +
                                " and shape " + shape_string(a.shape));
   return f8 ? points_of<double>(a, path) : points_of<float>(a, path);
+}
+}  // namespace
+
+std::vector<Vec3d> read_points_npy(const std::string& path) {
+  return points_of_array(read_npy(path, NpyOrder::c_or_fortran), path);
+}
+
+std::vector<Vec3d> parse_points_npy(const char* bytes, std::size_t n, const std::string& name) {
+  return points_of_array(parse_npy(bytes, n, name, NpyOrder::c_or_fortran), name);
 }
 
 }  // namespace bvhbench

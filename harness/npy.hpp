@@ -51,7 +51,8 @@ using NpyByteSource = std::function<void(void* out, std::size_t n)>;
 NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name,
                        NpyOrder order = NpyOrder::c_only);
 /// Parses .npy bytes; `name` is used in error messages. Throws InputError.
-NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name);
+NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name,
+                   NpyOrder order = NpyOrder::c_only);
 NpyArray read_npy(const std::string& path, NpyOrder order = NpyOrder::c_only);
 
 /// The header that a .npy of `a` starts with (magic, version, dict, padding to 64 bytes), as
@@ -66,5 +67,7 @@ void write_npy(const std::string& path, const NpyArray& a);
 /// C or Fortran order, in the file's row order. Throws InputError naming the file if it is not
 /// one, or if a value is NaN or infinite (naming the point).
 std::vector<Vec3d> read_points_npy(const std::string& path);
+/// The same for .npy bytes in memory; `name` names them in messages.
+std::vector<Vec3d> parse_points_npy(const char* bytes, std::size_t n, const std::string& name);
 
 }  // namespace bvhbench

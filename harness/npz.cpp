@@ -7,8 +7,10 @@
 
 namespace bvhbench {
 
-std::map<std::string, NpyArray> read_npz(const std::string& path) {
-  ZipReader zip(path);
+namespace {
+
+std::map<std::string, NpyArray> read_arrays(ZipReader& zip) {
+  const std::string& path = zip.path();
   std::map<std::string, NpyArray> out;
   for (const ZipEntry& z : zip.entries()) {
     if (!z.name.empty() && z.name.back() == '/') continue;  // a directory
@@ -22,6 +24,18 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     out.emplace(key, std::move(a));
   }
   return out;
+}
+
+}  // namespace
+
+std::map<std::string, NpyArray> read_npz(const std::string& path) {
+  ZipReader zip(path);
+  return read_arrays(zip);
+}
+
+std::map<std::string, NpyArray> parse_npz(std::string_view bytes, const std::string& name) {
+  ZipReader zip(bytes, name);
+  return read_arrays(zip);
 }
 
 void write_npz(const std::string& path, const std::map<std::string, NpyArray>& arrays) {

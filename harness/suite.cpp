@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -143,13 +144,18 @@ QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const f
 }  // namespace
 
 SuiteConfig load_suite(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw file_error(path, "cannot read suite file");
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return parse_suite(text, path);
+}
+
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
   SuiteConfig cfg;
   cfg.file = path;
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw file_error(path, "cannot read suite file");
+    root = YAML::Load(yaml);
   } catch (const YAML::Exception& e) {
     throw file_error(path, std::string("malformed YAML: ") + e.what());
   }

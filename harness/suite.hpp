@@ -50,6 +50,9 @@ struct SuiteConfig {
 
 /// Parses and expands a suite file. Throws InputError naming the file and the problem.
 SuiteConfig load_suite(const std::string& path);
+/// The same for the suite text `yaml` of the file `path` (which names it in messages; relative
+/// paths in it are resolved against its folder). Reads no file.
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path);
 
 /// The flat summary row of one result (also used by compare and tests).
 std::vector<std::string> summary_header();

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <new>
 #include <stdexcept>
+#include <utility>
 
 #include "errors.hpp"
 
@@ -137,6 +138,8 @@ std::vector<ZipEntry> read_central_directory(InputFile& f) {
 // Reading
 // ---------------------------------------------------------------------------------------------
 ZipReader::ZipReader(const std::string& path) : file_(path), entries_(read_central_directory(file_)) {}
+ZipReader::ZipReader(std::string_view data, std::string name)
+    : file_(data, std::move(name)), entries_(read_central_directory(file_)) {}
 
 struct ZipReader::EntryReader::Inflate {
   z_stream z{};

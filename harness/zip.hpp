@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "binary_file.hpp"
@@ -28,6 +29,8 @@ class ZipReader {
   /// Reads the end record and the central directory; throws InputError if the file is not a ZIP
   /// (saying so when it is a .npy), is truncated or has a corrupt directory.
   explicit ZipReader(const std::string& path);
+  /// The same for a ZIP in memory (not copied: `data` must outlive the reader); `name` names it.
+  ZipReader(std::string_view data, std::string name);
   ZipReader(const ZipReader&) = delete;
   ZipReader& operator=(const ZipReader&) = delete;
 
