@@ -1,0 +1,36 @@
+// Fuzz target: the suite loader (harness/suite.hpp: parse_suite; yaml-cpp underneath), with the
+// methods of this build registered.
+//
+// Beyond the contract (fuzz_contract.hpp), an accepted suite must hold what the runner relies on
+// without further checks: at least one repetition, a positive time limit, a memory limit the
+// child's address-space limit can be set from (0 = none), and unique job ids that are
+// filesystem-safe (they name result files).
+#include <cctype>
+#include <cstddef>
+#include <cstdint>
+#include <set>
+
+#include "fuzz_contract.hpp"
+#include "suite.hpp"
+
+using namespace bvhbench;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string name = "fuzz/suite.yml";
+  const std::string text(fuzz::as_text(data, size));
+  SuiteConfig cfg;
+  if (!fuzz::accepts(name, [&] { cfg = parse_suite(text, name); })) return 0;
+  fuzz::check(cfg.repeat >= 1, "repeat < 1");
+  fuzz::check(cfg.timeout_s > 0, "timeout_s is not > 0");
+  fuzz::check(cfg.memory_limit_mb >= 0 && cfg.memory_limit_mb * 1024 * 1024 < 0x1p64,
+              "memory_limit_mb cannot be an address-space limit: " + std::to_string(cfg.memory_limit_mb));
+  std::set<std::string> ids;
+  for (const JobPlan& j : cfg.jobs) {
+    fuzz::check(ids.insert(j.id).second, "job id " + j.id + " twice");
+    fuzz::check(!j.id.empty() && j.id.size() <= 200, "job id of " + std::to_string(j.id.size()) + " bytes");
+    for (char c : j.id)
+      fuzz::check(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '=' || c == '_',
+                  "job id " + j.id + " is not filesystem-safe");
+  }
+  return 0;
+}
