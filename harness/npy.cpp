@@ -406,7 +406,9 @@ NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name, Np
   std::size_t at = 0;
   return read_npy_from(
       [&](void* out, std::size_t k) {
-        std::memcpy(out, bytes + at, k);  // read_npy_from never asks for more than n in all
+        // read_npy_from never asks for more than n in all; for an empty array it asks for 0
+        // bytes into an empty buffer, whose data() may be null (memcpy's arguments may not).
+        if (k > 0) std::memcpy(out, bytes + at, k);
         at += k;
       },
       n, name, order);

@@ -126,6 +126,18 @@ TEST(Npy, PointsRoundTrip) {
   std::remove(path.c_str());
 }
 
+// Bytes in memory read as a file does, empty arrays included (an empty buffer's data() may be
+// null: the in-memory source must not pass it to memcpy; the fuzzer's UBSan build found it).
+TEST(Npy, ParsesFromMemoryLikeAFile) {
+  for (const std::vector<Vec3d>& pts : {std::vector<Vec3d>{}, std::vector<Vec3d>{{0.1, 0.2, 0.3}, {-1e10, 0, 5e-324}}}) {
+    const std::string bytes = npy_bytes(NpyArray::f8_n3(pts));
+    EXPECT_EQ(parse_points_npy(bytes.data(), bytes.size(), "mem.npy"), pts);
+    const NpyArray a = parse_npy(bytes.data(), bytes.size(), "mem.npy");
+    EXPECT_EQ(a.shape, (std::vector<std::size_t>{pts.size(), 3}));
+    EXPECT_EQ(a.data.size(), 24 * pts.size());
+  }
+}
+
 TEST(Npy, NpzRoundTrip) {
   std::map<std::string, NpyArray> z;
   z["distance"] = NpyArray::f8({1.5, -2.0});
