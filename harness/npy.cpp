@@ -354,6 +354,7 @@ std::string NpyArray::unicode_value(std::size_t i) const {
     std::uint32_t cp = 0;
     for (int k = 3; k >= 0; --k) cp = cp << 8 | static_cast<unsigned char>(data[j + k]);
     if (cp == 0) break;  // NumPy pads with NULs
+    if ((cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) cp = 0xFFFD;  // not encodable in UTF-8
     if (cp < 0x80) {
       out += char(cp);
     } else if (cp < 0x800) {

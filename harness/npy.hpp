@@ -35,6 +35,8 @@ struct NpyArray {
   /// holding the UTF-8 string `s` as UTF-32LE, as NumPy stores str values.
   static NpyArray unicode(const std::string& s);
   /// Element i of a "<U*" array as UTF-8, trailing NUL padding dropped ("" if not unicode).
+  /// Always valid UTF-8 (it may go into a result JSON): a code unit that is no Unicode scalar
+  /// value (a surrogate, or above U+10FFFF) reads as U+FFFD, the replacement character.
   std::string unicode_value(std::size_t i = 0) const;
 };
 

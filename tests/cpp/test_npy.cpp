@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "errors.hpp"
 #include "npy.hpp"
 #include "npz.hpp"
@@ -114,6 +116,21 @@ TEST(Npy, UnicodeHelper) {
   EXPECT_EQ(NpyArray::unicode("").dtype, "<U1");
   EXPECT_EQ(NpyArray::unicode("").unicode_value(), "");
   EXPECT_EQ(NpyArray::f8({1.0}).unicode_value(), "");
+}
+
+// Code units that are no Unicode scalar value (a file may hold any 32-bit value) read as U+FFFD,
+// so that the string is valid UTF-8 in a result JSON (found by fuzz_npy).
+TEST(Npy, UnicodeValueIsValidUtf8) {
+  NpyArray a = NpyArray::unicode("abcd");
+  auto set = [&](int k, std::uint32_t cp) {
+    for (int b = 0; b < 4; ++b) a.data[4 * k + b] = char((cp >> (8 * b)) & 0xff);
+  };
+  set(0, 0xD800);      // a surrogate
+  set(1, 0x110000);    // above U+10FFFF
+  set(2, 0xFFFFFFFF);
+  set(3, 0x10FFFF);    // the last scalar value: kept
+  EXPECT_EQ(a.unicode_value(), "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD\xF4\x8F\xBF\xBF");
+  EXPECT_NO_THROW((void)nlohmann::json(a.unicode_value()).dump());
 }
 
 TEST(Npy, PointsRoundTrip) {
