@@ -17,6 +17,7 @@
 
 #include "commands.hpp"
 #include "errors.hpp"
+#include "json_input.hpp"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -174,12 +175,7 @@ json read_result_file(const std::string& file) {
 }  // namespace
 
 json parse_result(const std::string& text, const std::string& file) {
-  json r;
-  try {
-    r = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw file_error(file, std::string("malformed JSON: ") + e.what());
-  }
+  json r = parse_json_input(text, file);
   validate_result(file, r);
   return r;
 }

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "correctly_rounded.hpp"
 #include "errors.hpp"
+#include "json_input.hpp"
 #include "mesh.hpp"
 #include "npy.hpp"
 #include "points_text.hpp"
@@ -76,12 +77,7 @@ QuerySet load_query_set(const std::string& points_path) {
 
 nlohmann::json parse_sidecar(std::string_view text, const std::string& side, const std::string& points_path,
                              std::size_t n_points) {
-  nlohmann::json meta;
-  try {
-    meta = nlohmann::json::parse(text);
-  } catch (const std::exception& e) {
-    throw file_error(side, std::string("malformed JSON: ") + e.what());
-  }
+  nlohmann::json meta = parse_json_input(text, side);
   if (!meta.is_object()) throw file_error(side, "sidecar is not a JSON object");
   for (const char* key : {"kind", "n", "seed"})
     if (!meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
