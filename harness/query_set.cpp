@@ -81,9 +81,13 @@ nlohmann::json parse_sidecar(std::string_view text, const std::string& side, con
   if (!meta.is_object()) throw file_error(side, "sidecar is not a JSON object");
   for (const char* key : {"kind", "n", "seed"})
     if (!meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
-  if (!meta["n"].is_number_integer() || meta["n"].get<long long>() != (long long)n_points)
-    throw file_error(side, "n = " + meta["n"].dump() + " does not match the " + std::to_string(n_points) +
-                               " points of " + points_path);
+  // The runner reads the kind as a string (QuerySet::kind()).
+  if (!meta["kind"].is_string())
+    throw file_error(side, std::string("kind must be a string, not ") + meta["kind"].type_name());
+  const nlohmann::json& n = meta["n"];
+  if (!n.is_number_integer() || n.get<long long>() != (long long)n_points)
+    throw file_error(side, "n = " + (n.is_number() ? n.dump() : std::string("(") + n.type_name() + ")") +
+                               " does not match the " + std::to_string(n_points) + " points of " + points_path);
   return meta;
 }
 

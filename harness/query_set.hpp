@@ -43,7 +43,7 @@ std::vector<Vec3d> read_query_points(const std::string& path);
 QuerySet load_query_set(const std::string& points_path);
 /// Parses and checks the sidecar JSON `text` of the query set `points_path`, which holds
 /// `n_points` points; `side` names the sidecar in messages. Returns the sidecar (a JSON object
-/// with kind, n = n_points and seed). Throws InputError naming `side` and the problem.
+/// with a string kind, n = n_points and a seed). Throws InputError naming `side` and the problem.
 nlohmann::json parse_sidecar(std::string_view text, const std::string& side, const std::string& points_path,
                              std::size_t n_points);
 /// Writes Q.npy and Q.json atomically; meta gets n and (if missing) created_by.
