@@ -2,10 +2,11 @@
 // methods of this build registered.
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted suite must hold what the runner relies on
-// without further checks: at least one repetition, a positive time limit, a memory limit the
-// child's address-space limit can be set from (0 = none), and unique job ids that are
+// without further checks: at least one repetition, a positive time limit, a finite memory limit
+// of at least 0 (0 = none; the child's address-space limit), and unique job ids that are
 // filesystem-safe (they name result files).
 #include <cctype>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <set>
@@ -22,8 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!fuzz::accepts(name, [&] { cfg = parse_suite(text, name); })) return 0;
   fuzz::check(cfg.repeat >= 1, "repeat < 1");
   fuzz::check(cfg.timeout_s > 0, "timeout_s is not > 0");
-  fuzz::check(cfg.memory_limit_mb >= 0 && cfg.memory_limit_mb * 1024 * 1024 < 0x1p64,
-              "memory_limit_mb cannot be an address-space limit: " + std::to_string(cfg.memory_limit_mb));
+  fuzz::check(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb),
+              "memory_limit_mb is no address-space limit: " + std::to_string(cfg.memory_limit_mb));
   std::set<std::string> ids;
   for (const JobPlan& j : cfg.jobs) {
     fuzz::check(ids.insert(j.id).second, "job id " + j.id + " twice");

@@ -150,15 +150,13 @@ SuiteConfig load_suite(const std::string& path) {
   return parse_suite(text, path);
 }
 
-SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
+namespace {
+
+/// The suite of the YAML document `root` of the file `path` (load_suite). Throws InputError, or a
+/// YAML::Exception where a value of the wrong shape is read (see parse_suite).
+SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
   SuiteConfig cfg;
   cfg.file = path;
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml);
-  } catch (const YAML::Exception& e) {
-    throw file_error(path, std::string("malformed YAML: ") + e.what());
-  }
   if (!root.IsMap()) throw file_error(path, "a suite is a YAML map (see suites/README.md)");
   const fs::path base = fs::path(path).parent_path();
   try {
@@ -172,6 +170,9 @@ SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
   }
   if (cfg.repeat < 1) throw file_error(path, "repeat must be >= 1");
   if (!(cfg.timeout_s > 0)) throw file_error(path, "timeout_s must be > 0");
+  // The child's address-space limit is set from it (0: none).
+  if (!(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb)))
+    throw file_error(path, "memory_limit_mb must be a number of MiB >= 0 (0 = no limit)");
   auto matrices = root["matrices"];
   if (!matrices || !matrices.IsSequence() || matrices.size() == 0)
     throw file_error(path, "missing 'matrices:' (a list of {meshes, queries, query, methods})");
@@ -239,7 +240,11 @@ SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
         // Validate now: a typo in a suite is bad input, not 40 failed jobs.
         std::string name;
         std::map<std::string, std::string> given;
-        parse_method_spec(s, &name, &given);
+        try {
+          parse_method_spec(s, &name, &given);
+        } catch (const InputError& e) {
+          yaml_error(path, n, e.what());
+        }
         const MethodInfo* info = Registry::global().find(name);
         if (!info) {
           try {
@@ -270,6 +275,24 @@ SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
           }
   }
   return cfg;
+}
+
+}  // namespace
+
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("malformed YAML: ") + e.what());
+  }
+  // A value of the wrong shape where a string or a number is read (a map as a mesh path, a list
+  // as a parameter name) is bad input like any other; yaml-cpp's message names its line.
+  try {
+    return expand_suite(root, path);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("bad value: ") + e.what());
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -424,7 +447,9 @@ ChildOutcome run_child(const std::vector<std::string>& args, double timeout_s, d
     if (getppid() != parent) _exit(127);
     if (memory_limit_mb > 0) {
       rlimit rl;
-      rl.rlim_cur = rl.rlim_max = rlim_t(memory_limit_mb * 1024.0 * 1024.0);
+      // A limit beyond what rlim_t holds is no limit (converting it would be undefined).
+      const double bytes = memory_limit_mb * 1024.0 * 1024.0;
+      rl.rlim_cur = rl.rlim_max = bytes < 0x1p63 ? rlim_t(bytes) : RLIM_INFINITY;
       setrlimit(RLIMIT_AS, &rl);
     }
     rlimit core{0, 0};
