@@ -377,7 +377,8 @@ std::string NpyArray::unicode_value(std::size_t i) const {
 // ---------------------------------------------------------------------------------------------
 // .npy
 // ---------------------------------------------------------------------------------------------
-NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name, NpyOrder order) {
+NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name, NpyOrder order,
+                       NpySize size_is) {
   // The header is read in the pieces parse_header asks for: 12 bytes hold the length field of
   // any version, then the whole dict.
   std::string head;
@@ -397,8 +398,20 @@ NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std:
   if (have != need)
     throw file_error(name, (have < need ? "truncated: " : "") + std::to_string(have) + " bytes of data, but dtype " +
                                h.dtype + " and shape " + shape_string(h.shape) + " need " + std::to_string(need));
-  a.data.resize(need);
-  read(a.data.data(), need);
+  constexpr std::size_t kFirstPiece = std::size_t(64) << 20;
+  if (size_is == NpySize::present || need <= kFirstPiece) {
+    a.data.resize(need);
+    read(a.data.data(), need);
+  } else {
+    // Each piece as large as what arrived before it: at most one more copy of the data, and a
+    // source that ends early throws before the buffer outgrows twice what it delivered.
+    for (std::size_t done = 0; done < need;) {
+      const std::size_t piece = std::min(need - done, std::max(done, kFirstPiece));
+      a.data.resize(done + piece);
+      read(a.data.data() + done, piece);
+      done += piece;
+    }
+  }
   normalise_byte_order(a);
   return a;
 }

@@ -47,11 +47,18 @@ enum class NpyOrder { c_only, c_or_fortran };
 /// A sequential source of bytes: must copy exactly the next `n` bytes to `out`, or throw.
 using NpyByteSource = std::function<void(void* out, std::size_t n)>;
 
+/// Whether the `size` given to read_npy_from is known to be there (a file's size, a stored ZIP
+/// entry's, bytes in memory) or only claimed by a header (the plain size of a deflated ZIP entry,
+/// which a corrupt directory can make about 1000 times what the entry really inflates to).
+enum class NpySize { present, claimed };
+
 /// Reads one .npy of `size` bytes from `read`; `name` is used in error messages. The data goes
-/// straight into the array's buffer. Throws InputError (bad magic, bad header, unsupported
-/// dtype, size that does not match the shape, ...).
+/// straight into the array's buffer; for a claimed size, the buffer grows as the bytes arrive
+/// (from 64 MiB, doubling), so that a lying header cannot make the reader allocate much more than
+/// the source delivers. Throws InputError (bad magic, bad header, unsupported dtype, size that
+/// does not match the shape, ...).
 NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name,
-                       NpyOrder order = NpyOrder::c_only);
+                       NpyOrder order = NpyOrder::c_only, NpySize size_is = NpySize::present);
 /// Parses .npy bytes; `name` is used in error messages. Throws InputError.
 NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name,
                    NpyOrder order = NpyOrder::c_only);

@@ -19,7 +19,10 @@ std::map<std::string, NpyArray> read_arrays(ZipReader& zip) {
     else continue;  // np.load only exposes .npy members as arrays
     if (out.count(key)) throw file_error(path, "duplicate entry " + quoted_excerpt(z.name, 100));
     ZipReader::EntryReader entry = zip.open(z);
-    NpyArray a = read_npy_from([&](void* dst, std::size_t n) { entry.read(dst, n); }, entry.size(), entry.where());
+    // A deflated entry's plain size is only what the directory says (zip.hpp bounds it to ~1000x
+    // the compressed size): the array grows as it inflates rather than being allocated for it.
+    NpyArray a = read_npy_from([&](void* dst, std::size_t n) { entry.read(dst, n); }, entry.size(), entry.where(),
+                               NpyOrder::c_only, z.method == 8 ? NpySize::claimed : NpySize::present);
     entry.finish();
     out.emplace(key, std::move(a));
   }

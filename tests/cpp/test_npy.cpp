@@ -155,6 +155,28 @@ TEST(Npy, ParsesFromMemoryLikeAFile) {
   }
 }
 
+// A deflated .npz entry's plain size is only claimed by the ZIP directory: read_npy_from must not
+// allocate it before the bytes arrive. Here the header claims 1 TiB of data and the source ends
+// after 1 MiB: an InputError, not std::bad_alloc (or the OOM killer).
+TEST(Npy, AClaimedSizeIsNotAllocatedUpFront) {
+  // What npy_header writes for a float64 array of 2^37 elements (which we cannot make to write it).
+  std::string head = "\x93NUMPY\x01";
+  head += '\0';
+  head += "v";
+  head += '\0';
+  head += "{'descr': '<f8', 'fortran_order': False, 'shape': (137438953472,), }";
+  head.resize(127, ' ');
+  head += '\n';
+  const std::uint64_t claimed = head.size() + (std::uint64_t(1) << 40);
+  std::uint64_t at = 0;
+  const NpyByteSource source = [&](void* out, std::size_t n) {
+    if (at + n > head.size() + (1u << 20)) throw file_error("lying.npz (entry 'a.npy')", "the deflate stream ends early");
+    for (std::size_t i = 0; i < n; ++i, ++at) static_cast<char*>(out)[i] = at < head.size() ? head[at] : '\0';
+  };
+  expect_input_error([&] { read_npy_from(source, claimed, "lying.npz (entry 'a.npy')", NpyOrder::c_only, NpySize::claimed); },
+                     "lying.npz", "ends early");
+}
+
 TEST(Npy, NpzRoundTrip) {
   std::map<std::string, NpyArray> z;
   z["distance"] = NpyArray::f8({1.5, -2.0});
