@@ -36,8 +36,8 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
   return read_arrays(zip);
 }
 
-std::map<std::string, NpyArray> parse_npz(std::string_view bytes, const std::string& name) {
-  ZipReader zip(bytes, name);
+std::map<std::string, NpyArray> parse_npz(std::string_view bytes, const std::string& name, bool verify_crc) {
+  ZipReader zip(bytes, name, verify_crc);
   return read_arrays(zip);
 }
 
