@@ -3,8 +3,8 @@
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted suite must hold what the runner relies on
 // without further checks: at least one repetition, a positive time limit, a finite memory limit
-// of at least 0 (0 = none; the child's address-space limit), and unique job ids that are
-// filesystem-safe (they name result files).
+// of at least 0 (0 = none; the child's address-space limit), at most kMaxSuiteJobs jobs, and
+// unique job ids that are filesystem-safe (they name result files).
 #include <cctype>
 #include <cmath>
 #include <cstddef>
@@ -25,6 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::check(cfg.timeout_s > 0, "timeout_s is not > 0");
   fuzz::check(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb),
               "memory_limit_mb is no address-space limit: " + std::to_string(cfg.memory_limit_mb));
+  fuzz::check(cfg.jobs.size() <= kMaxSuiteJobs, std::to_string(cfg.jobs.size()) + " jobs");
   std::set<std::string> ids;
   for (const JobPlan& j : cfg.jobs) {
     fuzz::check(ids.insert(j.id).second, "job id " + j.id + " twice");

@@ -106,6 +106,8 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
       axes.push_back({kv.first.as<std::string>(), vals});
     }
     for (auto& [k, vals] : axes) {
+      if (specs.size() * vals.size() > kMaxSuiteJobs)
+        yaml_error(file, n, "the parameter sweep makes more than " + std::to_string(kMaxSuiteJobs) + " variants");
       std::vector<std::string> next;
       for (auto& s : specs)
         for (auto& v : vals) next.push_back(s + (s.empty() ? "" : ",") + k + "=" + v);
@@ -179,6 +181,7 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
 
   std::set<std::string> seen;
   std::map<std::string, std::string> query_files;  // label -> file, across matrices
+  double expanded = 0;                              // jobs of the matrices so far, duplicates included
   for (auto m : matrices) {
     if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
     for (const char* key : {"meshes", "queries", "methods"})
@@ -259,7 +262,14 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
           yaml_error(path, n, e.what());
         }
         methods.push_back(s);
+        if (methods.size() > kMaxSuiteJobs)
+          yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
       }
+    // Before the product is made: its size, in floating point since it may not fit in 64 bits.
+    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size());
+    if (expanded > double(kMaxSuiteJobs))
+      yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
+                              " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
     for (auto& mesh : meshes)
       for (auto& q : queries)
         for (auto t : types)
