@@ -218,3 +218,21 @@ def test_coherent_peer_is_compared_with_the_coherent_ebp_variant(tmp_path):
     md = read(results / "report" / "paper_table.md")
     line = next(x for x in md.splitlines() if x.startswith("| bunny") and "embree:coherent=true" in x and "×" in x)
     assert line.split("|")[5].strip() == "2×", line
+
+
+def test_median_is_the_harness_median():
+    """One median for tables, charts and the representative configuration, computed as the
+    harness computes its own (the middle two averaged)."""
+    assert results_io.median([3.0, None, 1.0, 2.0]) == 2.0
+    assert results_io.median([4.0, 1.0, 2.0, 3.0]) == 2.5
+    assert results_io.median([None]) is None and results_io.median([]) is None
+
+
+def test_non_finite_distances_are_wrong_answers():
+    """The harness keeps NaN and infinite distances out of the error statistics, so a job that
+    answered only NaN has no error to speak of: it must be flagged by its count."""
+    import tables
+    job = results_io.Job({"status": "ok", "job": {"method": "m", "query": "distance"},
+                          "accuracy": {"distance": {"rel_error": {"max": 0.0, "p99": 0.0},
+                                                    "sign_wrong": 0, "non_finite": 3}}}, "m.json")
+    assert tables.accuracy_problems(job) == ["3 non-finite distances (NaN or infinite)"]
