@@ -84,14 +84,15 @@ def test_matrix_cells(tmp_path):
 
 
 def test_fixture_results(tmp_path):
-    """The report's fixture: its stress meshes only, every status there."""
+    """The report's fixture (a real suite run): its stress meshes only, every status there."""
     p = subprocess.run([sys.executable, str(TOOL), str(FIXTURE), "--out", str(tmp_path)],
                        capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     with open(tmp_path / "stability_matrix.csv") as f:
         rows = list(csv.DictReader(f))
-    assert {r["status"] for r in rows} >= {"ok", "ok_wrong", "unchecked", "oom", "error"}
-    assert {r["mesh"] for r in rows} == {"spot_noisy", "stress_degenerate", "stress_duplicate"}
+    assert {r["status"] for r in rows} >= {"ok", "ok_wrong", "rejected_input", "oom", "error"}
+    assert {r["mesh"] for r in rows} == {"spot_open", "stress_nonmanifold_edges",
+                                         "stress_single_triangle", "stress_empty"}
 
 
 def test_missing_folder(tmp_path):
@@ -139,3 +140,23 @@ assert not bad, bad
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
 
+
+def test_headline_is_the_error_rate_away_from_the_surface():
+    """On the fixture's open scan, on-surface points have no well-defined side: CGAL's cell has
+    wrong answers there only, so its chart text is the far rate, 0, not the overall one."""
+    sys.path.insert(0, str(ROOT / "plots"))
+    import results_io
+    import stability
+    m = stability.matrix(results_io.load(FIXTURE))
+    cell = m["inside"][2][("cgal_aabb", "spot_open")]
+    assert cell["jobs"] == 2 and cell["statuses"] == "ok:2" and cell["status"] == "ok"
+    assert cell["inside_wrong_rate_max"] > 0 and cell["inside_wrong_rate_far_max"] == 0
+    assert stability.short_text("inside", cell) == "0"
+    assert stability.md_text("inside", cell) == "ok · in 0"
+    import fmt
+    raw = json.loads((FIXTURE / "runs" / "stress_single_triangle__random-n200-s1__distance__"
+                      "openvdb_voxel=3.json").read_text())
+    vdb = m["distance"][2][("openvdb:voxel=3", "stress_single_triangle")]
+    assert vdb["status"] == "ok_wrong"
+    assert stability.short_text("distance", vdb) == fmt.sci(
+        raw["accuracy"]["distance"]["rel_error"]["max"], 1)
