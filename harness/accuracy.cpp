@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "errors.hpp"
-#include "npy.hpp"
+#include "npz.hpp"
 
 namespace bvhbench {
 

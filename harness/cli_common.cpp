@@ -1,4 +1,5 @@
-// `bvhbench methods`: what is registered, what it answers, its parameters with defaults.
+// `bvhbench methods`: what is registered, what it answers, which of its counters depend on the
+// machine, its parameters with defaults.
 #include <iomanip>
 #include <iostream>
 
@@ -29,6 +30,8 @@ nlohmann::json method_json(const MethodInfo& m) {
     ps.push_back(pj);
   }
   j["params"] = ps;
+  // Counters compare gates exactly only against a baseline of the same machine fingerprint.
+  j["machine_dependent_counters"] = m.machine_dependent_counters;
   return j;
 }
 
@@ -61,6 +64,12 @@ void add_methods_command(CLI::App& app) {
       std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
                 << "  " << m.description << "\n"
                 << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n";
+      std::string machine;
+      for (auto& c : m.machine_dependent_counters) machine += (machine.empty() ? "" : ", ") + c;
+      std::cout << "  machine-dependent counters: "
+                << (machine.empty() ? "none (every counter depends on the input alone)"
+                                    : machine + " (gated only against a baseline of the same machine fingerprint)")
+                << "\n";
       if (m.params.empty()) std::cout << "  parameters: none\n";
       for (auto& p : m.params) {
         std::string type = to_string(p.type);

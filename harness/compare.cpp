@@ -140,6 +140,15 @@ void validate_result(const std::string& file, const json& r) {
   need_object_or_null(at(r, {"accuracy"}), "accuracy");
   need_object_or_null(at(r, {"calibration"}), "calibration");
   need_object_or_null(at(r, {"job", "params"}), "job.params");
+  const json& machine = at(r, {"machine_dependent"});
+  need_object_or_null(machine, "machine_dependent");
+  const json& machine_names = at(machine, {"counters"});
+  if (!machine_names.is_null()) {
+    if (!machine_names.is_array()) throw file_error(file, "machine_dependent.counters must be an array of counter names");
+    for (auto& v : machine_names)
+      if (!v.is_string()) throw file_error(file, "machine_dependent.counters holds a non-string");
+  }
+  need_object_or_null(at(machine, {"fingerprint"}), "machine_dependent.fingerprint");
   const json& samples = at(r, {"queries", "throughput_qps", "samples"});
   if (!samples.is_null()) {
     if (!samples.is_array()) throw file_error(file, "queries.throughput_qps.samples must be an array");
@@ -274,6 +283,25 @@ void flatten(const json& j, const std::string& prefix, std::map<std::string, jso
   }
 }
 
+/// One leaf path of either of two JSON trees, with its value in each (null where it is absent).
+struct PairedLeaf {
+  std::string path;
+  json base, fresh;
+};
+
+/// The union of the leaves (flatten) of two trees, sorted by path.
+std::vector<PairedLeaf> paired_leaves(const json& base, const json& fresh) {
+  std::map<std::string, json> fb, fn;
+  flatten(base, "", &fb);
+  flatten(fresh, "", &fn);
+  std::vector<PairedLeaf> out;
+  for (auto& [k, v] : fb) out.push_back({k, v, fn.count(k) ? fn[k] : json(nullptr)});
+  for (auto& [k, v] : fn)
+    if (!fb.count(k)) out.push_back({k, json(nullptr), v});
+  std::sort(out.begin(), out.end(), [](const PairedLeaf& x, const PairedLeaf& y) { return x.path < y.path; });
+  return out;
+}
+
 bool same_value(const json& a, const json& b, double rtol) {
   if (a.is_number() && b.is_number()) {
     const double x = a.get<double>(), y = b.get<double>();
@@ -289,6 +317,38 @@ std::string change_text(const json& a, const json& b) {
   std::string s = show(a) + " -> " + show(b);
   if (a.is_number() && b.is_number() && a.get<double>() != 0)
     s += " (" + fmt(100.0 * (b.get<double>() / a.get<double>() - 1), "%+.3g") + "%)";
+  return s;
+}
+
+/// A short name for a machine fingerprint, for the report's header: CPU and widest vector ISA.
+std::string fingerprint_label(const json& fp) {
+  if (!fp.is_object()) return "(no fingerprint)";
+  const json& cpu = at(fp, {"cpu"});
+  std::string s = str(at(cpu, {"vendor"}), str(at(cpu, {"arch"}), "?"));
+  if (at(cpu, {"family"}).is_number()) s += " family " + at(cpu, {"family"}).dump();
+  if (at(cpu, {"model"}).is_number()) s += " model " + at(cpu, {"model"}).dump();
+  auto has = [&](const char* f) { return at(fp, {"isa", f}) == json(true); };
+  const char* widest = has("avx512f") && has("avx512dq") && has("avx512cd") && has("avx512bw") && has("avx512vl")
+                           ? "avx512"
+                       : has("avx2") && has("fma") ? "avx2"
+                       : has("avx")                ? "avx"
+                       : has("sse4.2")             ? "sse4.2"
+                       : has("sse2")               ? "sse2"
+                                                   : "?";
+  return s + ", " + widest;
+}
+
+/// The reason machine-dependent counters of this pair are not gated, or "" when they are: both
+/// results carry a machine fingerprint and the two are equal. `diffs` receives the differences.
+std::string machine_not_gated_reason(const json& b, const json& n, std::vector<std::string>* diffs) {
+  const json& fb = at(b, {"machine_dependent", "fingerprint"});
+  const json& fn = at(n, {"machine_dependent", "fingerprint"});
+  if (!fb.is_object()) return "the baseline has no machine fingerprint (made before results recorded one)";
+  if (!fn.is_object()) return "the new result has no machine fingerprint";
+  *diffs = fingerprint_differences(fb, fn);
+  if (diffs->empty()) return "";
+  std::string s = "machine fingerprints differ: ";
+  for (std::size_t i = 0; i < diffs->size(); ++i) s += (i ? ", " : "") + (*diffs)[i];
   return s;
 }
 
@@ -350,8 +410,9 @@ json timing_block(const json& b, const json& n, const CompareOptions& opt) {
 }
 
 json side_info(const ResultSet& s) {
-  std::set<std::string> hosts, commits, cpus;
+  std::set<std::string> hosts, commits, cpus, machines;
   for (auto& r : s.results) {
+    if (str(at(r, {"status"})) == "ok") machines.insert(fingerprint_label(at(r, {"machine_dependent", "fingerprint"})));
     std::string h = str(at(r, {"context", "host"}));
     if (!h.empty()) hosts.insert(h);
     std::string c = str(at(r, {"context", "git_commit"}));
@@ -359,7 +420,8 @@ json side_info(const ResultSet& s) {
     std::string cpu = str(at(r, {"context", "cpu_model"}));
     if (!cpu.empty()) cpus.insert(cpu);
   }
-  return {{"path", s.path}, {"results", s.results.size()}, {"hosts", hosts}, {"commits", commits}, {"cpus", cpus}};
+  return {{"path", s.path}, {"results", s.results.size()}, {"hosts", hosts}, {"commits", commits}, {"cpus", cpus},
+          {"machines", machines}};
 }
 
 /// One row: everything known about a (base, new) pair. Either may be null (missing / new).
@@ -431,22 +493,43 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
       verdict = "unchanged";
     } else {
       // Both ok: deterministic work first, then accuracy, then timing.
-      json counters = json::array();
-      std::map<std::string, json> cb, cn;
-      flatten(at(*b, {"counters"}).is_object() ? at(*b, {"counters"}) : json::object(), "", &cb);
-      flatten(at(*n, {"counters"}).is_object() ? at(*n, {"counters"}) : json::object(), "", &cn);
-      std::set<std::string> keys;
-      for (auto& kv : cb) keys.insert(kv.first);
-      for (auto& kv : cn) keys.insert(kv.first);
-      for (auto& k : keys) {
-        json vb = cb.count(k) ? cb[k] : json(nullptr), vn = cn.count(k) ? cn[k] : json(nullptr);
-        if (!same_value(vb, vn, 0.0)) counters.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+      // The counters NEW declares machine-dependent (its code knows best) gate exactly only
+      // when both sides carry the same machine fingerprint; otherwise they are reported.
+      std::set<std::string> machine;
+      for (auto& v : at(*n, {"machine_dependent", "counters"})) machine.insert(v.get<std::string>());
+      std::vector<std::string> fp_diffs;
+      const std::string not_gated_why = machine.empty() ? "" : machine_not_gated_reason(*b, *n, &fp_diffs);
+      json counters = json::array(), counters_not_gated = json::array();
+      std::size_t not_gated_values = 0;
+      for (auto& [k, vb, vn] : paired_leaves(at(*b, {"counters"}).is_object() ? at(*b, {"counters"}) : json::object(),
+                                             at(*n, {"counters"}).is_object() ? at(*n, {"counters"}) : json::object())) {
+        const bool changed = !same_value(vb, vn, 0.0);
+        // A counter that appears or disappears is a change of the method's code: it gates.
+        if (!not_gated_why.empty() && machine.count(k) && !vb.is_null() && !vn.is_null()) {
+          ++not_gated_values;
+          if (changed) counters_not_gated.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+        } else if (changed) {
+          counters.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+        }
       }
-      if (!counters.empty()) {
+      auto changes_text = [](const json& list) {
         std::string d;
-        for (auto& c : counters) d += (d.empty() ? "" : ", ") + c["name"].get<std::string>() + " " + change_text(c["base"], c["new"]);
-        reason("counters_changed", d);
+        for (auto& c : list) d += (d.empty() ? "" : ", ") + c["name"].get<std::string>() + " " + change_text(c["base"], c["new"]);
+        return d;
+      };
+      if (!counters.empty()) {
+        reason("counters_changed", changes_text(counters));
         p["counters"] = counters;
+      }
+      if (!machine.empty())
+        p["machine_dependent"] = {{"counters", machine},
+                                  {"gated", not_gated_why.empty()},
+                                  {"not_gated_because", not_gated_why.empty() ? json(nullptr) : json(not_gated_why)},
+                                  {"fingerprint_differences", fp_diffs},
+                                  {"values_not_gated", not_gated_values}};
+      if (!counters_not_gated.empty()) {
+        reason("machine_counters_not_gated", changes_text(counters_not_gated) + "; not gated: " + not_gated_why);
+        p["counters_not_gated"] = counters_not_gated;
       }
       json accuracy = json::array();
       const json& ab = at(*b, {"accuracy"});
@@ -454,16 +537,8 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
       if (ab.is_null() != an.is_null()) {
         accuracy.push_back({{"field", "accuracy"}, {"base", ab.is_null() ? "none" : "measured"}, {"new", an.is_null() ? "none" : "measured"}});
       } else if (!ab.is_null()) {
-        std::map<std::string, json> fb, fn;
-        flatten(ab, "", &fb);
-        flatten(an, "", &fn);
-        std::set<std::string> fk;
-        for (auto& kv : fb) fk.insert(kv.first);
-        for (auto& kv : fn) fk.insert(kv.first);
-        for (auto& k : fk) {
-          json vb = fb.count(k) ? fb[k] : json(nullptr), vn = fn.count(k) ? fn[k] : json(nullptr);
+        for (auto& [k, vb, vn] : paired_leaves(ab, an))
           if (!same_value(vb, vn, opt.rtol)) accuracy.push_back({{"field", k}, {"base", vb}, {"new", vn}});
-        }
       }
       if (!accuracy.empty()) {
         std::string d;
@@ -549,6 +624,13 @@ int severity(const json& p) {
 
 }  // namespace
 
+std::vector<std::string> fingerprint_differences(const json& base, const json& fresh) {
+  std::vector<std::string> out;
+  for (auto& [k, vb, vn] : paired_leaves(base, fresh))
+    if (vb != vn) out.push_back(k + " " + show(vb) + " -> " + show(vn));
+  return out;
+}
+
 json compare_result_sets(const ResultSet& base, const ResultSet& fresh, const CompareOptions& opt) {
   json rows = json::array();
   for (auto& [b, n] : pair_up(base, fresh)) rows.push_back(compare_pair(b, n, opt));
@@ -558,11 +640,22 @@ json compare_result_sets(const ResultSet& base, const ResultSet& fresh, const Co
   });
   json summary = {{"failed", 0}, {"regressed", 0}, {"missing", 0}, {"improved", 0}, {"new", 0}, {"unchanged", 0}};
   int gating = 0;
+  std::size_t ng_jobs = 0, ng_values = 0, ng_changed = 0;
+  std::set<std::string> ng_why;
   for (auto& r : rows) {
     summary[r["verdict"].get<std::string>()] = summary[r["verdict"].get<std::string>()].get<int>() + 1;
     gating += r["gates"].get<bool>() ? 1 : 0;
+    if (!r.contains("machine_dependent") || r["machine_dependent"]["gated"].get<bool>()) continue;
+    const std::size_t values = r["machine_dependent"]["values_not_gated"].get<std::size_t>();
+    if (values == 0) continue;
+    ++ng_jobs;
+    ng_values += values;
+    ng_changed += r.contains("counters_not_gated") ? r["counters_not_gated"].size() : 0;
+    ng_why.insert(r["machine_dependent"]["not_gated_because"].get<std::string>());
   }
   summary["gating"] = gating;
+  // Machine-dependent counter values compared under differing (or missing) fingerprints.
+  summary["not_gated"] = {{"jobs", ng_jobs}, {"counters", ng_values}, {"changed", ng_changed}, {"why", ng_why}};
   return {{"schema", "bvhbench.compare/1"},
           {"base", side_info(base)},
           {"new", side_info(fresh)},
@@ -611,9 +704,11 @@ std::string compare_markdown(const json& rep) {
     const json& b = rep[side];
     o << "- " << (std::string(side) == "base" ? "BASE" : "NEW") << ": `" << b["path"].get<std::string>() << "`, "
       << b["results"].get<std::size_t>() << " results; host " << join(b["hosts"]) << "; commit " << join(b["commits"])
-      << "\n";
+      << "; machine " << join(b["machines"]) << "\n";
   }
-  o << "- Counters, accuracy and statuses: exact (any change gates). Throughput: normalised by the "
+  o << "- Counters, accuracy and statuses: exact (any change gates), except the counters a method declares "
+       "machine-dependent, which gate only when both results carry the same machine fingerprint and are "
+       "otherwise reported, not gated. Throughput: normalised by the "
        "calibration kernel; a change counts when it exceeds "
     << fmt(100 * opt["threshold"].get<double>(), "%g") << "% and a two-sided Mann-Whitney U test gives p < "
     << fmt(opt["alpha"].get<double>(), "%g") << "; timing verdicts "
@@ -644,6 +739,14 @@ std::string compare_markdown(const json& rep) {
   o << "\n" << s["failed"].get<int>() << " failed, " << s["regressed"].get<int>() << " regressed, "
     << s["missing"].get<int>() << " missing, " << s["improved"].get<int>() << " improved, " << s["new"].get<int>()
     << " new, " << s["unchanged"].get<int>() << " unchanged; " << gating << " gating.\n";
+  const json& ng = s["not_gated"];
+  if (ng["counters"].get<std::size_t>() > 0) {
+    std::string why;
+    for (auto& w : ng["why"]) why += (why.empty() ? "" : "; ") + w.get<std::string>();
+    o << "\nNot gated: " << ng["counters"].get<std::size_t>() << " machine-dependent counter values in "
+      << ng["jobs"].get<std::size_t>() << " jobs, " << ng["changed"].get<std::size_t>() << " of them changed, because "
+      << why << ".\n";
+  }
 
   // Full lists of what changed, for the rows above whose cells were cut short.
   bool header = false;
@@ -656,6 +759,18 @@ std::string compare_markdown(const json& rep) {
       for (auto& c : p["counters"]) o << "- counter `" << c["name"].get<std::string>() << "`: " << change_text(c["base"], c["new"]) << "\n";
     if (p.contains("accuracy"))
       for (auto& a : p["accuracy"]) o << "- accuracy `" << a["field"].get<std::string>() << "`: " << change_text(a["base"], a["new"]) << "\n";
+  }
+  header = false;
+  for (auto& p : rep["pairs"]) {
+    if (!p.contains("counters_not_gated")) continue;
+    if (!header)
+      o << "\n### Machine-dependent counters, reported and not gated\n\n"
+           "They depend on the processor as well as on the input; a baseline made on a machine with the same "
+           "fingerprint gates them exactly (docs/compare.md, \"The CI gate\").\n";
+    header = true;
+    o << "\n`" << p["job"].get<std::string>() << "`: not gated because " << p["machine_dependent"]["not_gated_because"].get<std::string>() << "\n";
+    for (auto& c : p["counters_not_gated"])
+      o << "- counter `" << c["name"].get<std::string>() << "`: " << change_text(c["base"], c["new"]) << "\n";
   }
   if (gating)
     o << "\nIf these changes are intended, regenerate the baseline (docs/compare.md, `make rebaseline`) "

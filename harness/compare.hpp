@@ -2,8 +2,10 @@
 /// `bvhbench compare BASE NEW`: verdicts between a baseline and a new result set.
 ///
 /// Jobs are paired by method, resolved parameters, mesh sha256, query-set sha256 and query type.
-/// Per pair, deterministic work counters and accuracy are compared exactly (any change gates);
-/// throughput is compared with a two-sided Mann-Whitney U test over the per-repetition samples,
+/// Per pair, deterministic work counters and accuracy are compared exactly (any change gates),
+/// except the counters NEW declares machine-dependent (MethodInfo::machine_dependent_counters):
+/// those gate exactly only when both results carry the same machine fingerprint, and are
+/// otherwise reported without gating (with the fingerprint fields that differ); throughput is compared with a two-sided Mann-Whitney U test over the per-repetition samples,
 /// each side first normalised by its own calibration kernel (calibration.hpp), and counts only
 /// when the change also exceeds a relative threshold. See docs/compare.md.
 #include <string>
@@ -65,9 +67,16 @@ struct CompareOptions {
 
 /// The comparison as JSON (schema "bvhbench.compare/1"): options, both sets' provenance, one
 /// entry per pair (verdict, reasons, whether it gates, counter/accuracy differences, timing
-/// statistics), a summary by verdict and `exit_code` (0 nothing gates, 1 something does).
+/// statistics; `machine_dependent` and `counters_not_gated` for counters reported, not gated), a
+/// summary by verdict (with `not_gated`: jobs, counter values, changed ones, why) and
+/// `exit_code` (0 nothing gates, 1 something does).
 nlohmann::json compare_result_sets(const ResultSet& base, const ResultSet& fresh,
                                    const CompareOptions& opt);
+
+/// Where two machine fingerprints (machine_fingerprint.hpp) differ: one text per differing leaf
+/// ("isa.avx512f true -> false", "cpu.model 1 -> 17", "libraries.embree (none) -> \"3.13.5\""),
+/// sorted by path; empty when they are equal.
+std::vector<std::string> fingerprint_differences(const nlohmann::json& base, const nlohmann::json& fresh);
 
 /// A readable Markdown report of compare_result_sets()'s JSON.
 std::string compare_markdown(const nlohmann::json& report);

@@ -90,6 +90,12 @@ class Method {
 
   /// Facts about the built structure worth recording (levels, node counts, ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
+
+  /// What a library this method calls chose on this machine that its machine-dependent counters
+  /// (MethodInfo::machine_dependent_counters) depend on, as far as the library tells (e.g.
+  /// Embree's native SIMD widths). Read after the counted pass; it becomes part of the result's
+  /// machine fingerprint. Default: nothing to add.
+  virtual nlohmann::json machine_facts() const { return nlohmann::json::object(); }
 };
 
 }  // namespace bvhbench

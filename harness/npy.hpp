@@ -1,8 +1,9 @@
 #pragma once
-/// NumPy .npy and .npz (uncompressed, as np.savez writes) reading and writing.
+/// The NumPy .npy format (versions 1, 2 and 3): one array per file, read and written. The .npz
+/// archives of several arrays are in npz.hpp.
 #include <cstddef>
 #include <cstdint>
-#include <map>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -10,11 +11,16 @@
 
 namespace bvhbench {
 
-/// One array: dtype descr as NumPy writes it ("<f8", "<i8", "|b1", "<f4", "<u4", ...), C order.
+/// One array: dtype descr as NumPy writes it ("<f8", "<i8", "|b1", "<f4", "<u4", ...), C order
+/// unless `fortran_order` says otherwise.
 struct NpyArray {
   std::string dtype;
   std::vector<std::size_t> shape;
   std::vector<char> data;  ///< raw little-endian bytes, product(shape) * itemsize
+  /// True only for an array of two or more dimensions read with NpyOrder::c_or_fortran from a
+  /// file in Fortran order: then the first index varies fastest (element (i, j) of an (N, M)
+  /// array is element j * N + i of `data`).
+  bool fortran_order = false;
   std::size_t size() const;      ///< number of elements
   std::size_t itemsize() const;  ///< bytes per element from dtype
 
@@ -32,21 +38,33 @@ struct NpyArray {
   std::string unicode_value(std::size_t i = 0) const;
 };
 
+/// Which memory orders a reader accepts. Our own arrays are C order; Fortran order is accepted
+/// where a caller indexes by `NpyArray::fortran_order` (points made by other tools).
+enum class NpyOrder { c_only, c_or_fortran };
+
+/// A sequential source of bytes: must copy exactly the next `n` bytes to `out`, or throw.
+using NpyByteSource = std::function<void(void* out, std::size_t n)>;
+
+/// Reads one .npy of `size` bytes from `read`; `name` is used in error messages. The data goes
+/// straight into the array's buffer. Throws InputError (bad magic, bad header, unsupported
+/// dtype, size that does not match the shape, ...).
+NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name,
+                       NpyOrder order = NpyOrder::c_only);
 /// Parses .npy bytes; `name` is used in error messages. Throws InputError.
 NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name);
-NpyArray read_npy(const std::string& path);
-std::string npy_bytes(const NpyArray& a);
+NpyArray read_npy(const std::string& path, NpyOrder order = NpyOrder::c_only);
+
+/// The header that a .npy of `a` starts with (magic, version, dict, padding to 64 bytes), as
+/// np.save writes it. Throws std::invalid_argument if `a` cannot be written (big-endian dtype,
+/// data size that does not match dtype and shape).
+std::string npy_header(const NpyArray& a);
+std::string npy_bytes(const NpyArray& a);  ///< npy_header(a) followed by the data
 /// Writes atomically (to PATH.tmp, then rename).
 void write_npy(const std::string& path, const NpyArray& a);
 
-/// Reads an .npz written by np.savez (stored entries; ZIP64 supported) or np.savez_compressed
-/// (deflate). Keys drop ".npy". Throws InputError for anything else, naming the file.
-std::map<std::string, NpyArray> read_npz(const std::string& path);
-/// Writes an uncompressed .npz that np.load reads; atomically.
-void write_npz(const std::string& path, const std::map<std::string, NpyArray>& arrays);
-
-/// Reads a float64 (N, 3) array as points; throws InputError naming the file if it is not one,
-/// or if a value is NaN or infinite.
+/// Reads an (N, 3) array of points: float64 or float32 (widened exactly), either byte order,
+/// C or Fortran order, in the file's row order. Throws InputError naming the file if it is not
+/// one, or if a value is NaN or infinite (naming the point).
 std::vector<Vec3d> read_points_npy(const std::string& path);
 
 }  // namespace bvhbench

@@ -20,7 +20,7 @@
 
 #include "errors.hpp"
 #include "mesh.hpp"
-#include "npy.hpp"
+#include "npz.hpp"
 
 namespace bvhbench {
 

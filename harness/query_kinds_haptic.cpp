@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "correctly_rounded.hpp"
 #include "errors.hpp"
 #include "progress.hpp"
 #include "query_kinds_detail.hpp"
@@ -257,9 +258,10 @@ std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t se
     const double fs = rng.uniform(0.2, 0.8), ps = rng.uniform(0, kTwoPi);
     const double f1 = rng.uniform(0.3, 1.0), p1 = rng.uniform(0, kTwoPi);
     const double f2 = rng.uniform(1.5, 4.0), p2 = rng.uniform(0, kTwoPi);
-    auto speed_at = [&](double t) { return slide * (0.6 + 0.4 * std::sin(kTwoPi * fs * t + ps)); };
+    // Correctly rounded sin/cos: the path is the same bytes on every machine (correctly_rounded.hpp).
+    auto speed_at = [&](double t) { return slide * (0.6 + 0.4 * correctly_rounded::sin(kTwoPi * fs * t + ps)); };
     auto offset_at = [&](double t) {
-      return L.band * 0.9 * (0.6 * std::sin(kTwoPi * f1 * t + p1) + 0.4 * std::sin(kTwoPi * f2 * t + p2));
+      return L.band * 0.9 * (0.6 * correctly_rounded::sin(kTwoPi * f1 * t + p1) + 0.4 * correctly_rounded::sin(kTwoPi * f2 * t + p2));
     };
     Vec3d probe = surf + nrm * offset_at(0);
     const Vec3d vel0 = dir * speed_at(0);
@@ -279,7 +281,7 @@ std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t se
         const double t = double(k) * dt;
         omega += -omega * dt / tau + turn_rate * std::sqrt(2 * dt / tau) * rng.normal();
         const double ang = omega * dt;
-        dir = dir * std::cos(ang) + cross(nrm, dir) * std::sin(ang);
+        dir = dir * correctly_rounded::cos(ang) + cross(nrm, dir) * correctly_rounded::sin(ang);
         Vec3d tangent = dir - nrm * dot(dir, nrm);
         if (norm(tangent) > 1e-9) dir = normalized(tangent);
         vel = dir * speed_at(t);

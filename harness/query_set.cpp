@@ -1,5 +1,6 @@
 #include "query_set.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,9 +11,11 @@
 #include <unistd.h>
 
 #include "commands.hpp"
+#include "correctly_rounded.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
 #include "npy.hpp"
+#include "points_text.hpp"
 #include "sha256.hpp"
 
 namespace bvhbench {
@@ -23,20 +26,48 @@ Box3d QuerySet::bounds() const {
   return b;
 }
 
-std::string sidecar_path(const std::string& npy_path) {
-  std::string s = npy_path;
-  if (s.size() >= 4 && s.compare(s.size() - 4, 4, ".npy") == 0) s.resize(s.size() - 4);
+namespace {
+
+/// The extension of `path` in lower case, with its dot ("" if none).
+std::string extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+bool is_points_extension(const std::string& ext) { return ext == ".npy" || ext == ".xyz" || ext == ".csv"; }
+
+}  // namespace
+
+std::string sidecar_path(const std::string& points_path) {
+  std::string s = points_path;
+  const std::string ext = extension(s);
+  if (is_points_extension(ext)) s.resize(s.size() - ext.size());
   return s + ".json";
 }
 
-QuerySet load_query_set(const std::string& npy_path) {
+std::vector<Vec3d> read_query_points(const std::string& path) {
+  const std::string ext = extension(path);
+  if (ext == ".npy") return read_points_npy(path);
+  if (ext == ".xyz" || ext == ".csv") return read_points_text(path);
+  throw file_error(path, "not a query set: expected a .npy, .xyz or .csv file of points");
+}
+
+QuerySet load_query_set(const std::string& points_path) {
   QuerySet q;
-  q.path = npy_path;
-  q.points = read_points_npy(npy_path);
-  q.sha256 = sha256_file(npy_path);
-  std::string side = sidecar_path(npy_path);
+  q.path = points_path;
+  q.points = read_query_points(points_path);
+  q.sha256 = sha256_file(points_path);
+  const std::string side = sidecar_path(points_path);
+  std::error_code ec;
+  if (!std::filesystem::exists(side, ec)) {
+    // Points made elsewhere: identified by their hash, replayed in the file's order.
+    const std::string ext = extension(points_path);
+    q.meta = {{"kind", "file"}, {"n", q.points.size()}, {"format", ext.substr(1)}, {"ordered", true}};
+    return q;
+  }
   std::ifstream f(side);
-  if (!f) throw file_error(side, "missing sidecar JSON for query set " + npy_path);
+  if (!f) throw file_error(side, "cannot read the sidecar JSON of query set " + points_path);
   try {
     q.meta = nlohmann::json::parse(f);
   } catch (const std::exception& e) {
@@ -47,7 +78,7 @@ QuerySet load_query_set(const std::string& npy_path) {
     if (!q.meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
   if (!q.meta["n"].is_number_integer() || q.meta["n"].get<long long>() != (long long)q.points.size())
     throw file_error(side, "n = " + q.meta["n"].dump() + " does not match the " +
-                               std::to_string(q.points.size()) + " points of " + npy_path);
+                               std::to_string(q.points.size()) + " points of " + points_path);
   return q;
 }
 
@@ -107,11 +138,12 @@ double Rng::normal() {
   }
   double u1 = uniform(), u2 = uniform();
   if (u1 < 1e-300) u1 = 1e-300;
-  double r = std::sqrt(-2.0 * std::log(u1));
+  // Correctly rounded log/sin/cos: the same bits on every machine (correctly_rounded.hpp).
+  double r = std::sqrt(-2.0 * correctly_rounded::log(u1));
   double t = 6.283185307179586476925 * u2;
-  spare_ = r * std::sin(t);
+  spare_ = r * correctly_rounded::sin(t);
   has_spare_ = true;
-  return r * std::cos(t);
+  return r * correctly_rounded::cos(t);
 }
 
 std::uint64_t Rng::below(std::uint64_t n) {

@@ -2,6 +2,11 @@
 /// Query sets (ARCHITECTURE.md, "Query sets"): NAME.npy (float64, N x 3) plus NAME.json with at
 /// least kind, n, seed, mesh_sha256 and the generator's parameters. Generation is deterministic:
 /// the same mesh, kind, n, seed and parameters give the same bytes on any machine.
+///
+/// Points made elsewhere are query sets too: a bare NAME.npy (float64 or float32, N x 3, either
+/// byte order, C or Fortran order) or a text file NAME.xyz / NAME.csv (points_text.hpp), without a
+/// sidecar, is a set of kind `file`, identified by the sha256 of its bytes and replayed in the
+/// file's order. A NAME.json beside any of them is its sidecar and is checked.
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -17,19 +22,24 @@ namespace bvhbench {
 struct Mesh;
 
 struct QuerySet {
-  std::string path;         ///< the .npy
-  std::string sha256;       ///< of the .npy bytes
-  nlohmann::json meta;      ///< the sidecar
+  std::string path;         ///< the .npy, .xyz or .csv
+  std::string sha256;       ///< of the file's bytes
+  nlohmann::json meta;      ///< the sidecar; without one {kind: file, n, format, ordered: true}
   std::vector<Vec3d> points;
   std::string kind() const { return meta.value("kind", std::string("unknown")); }
   Box3d bounds() const;
 };
 
-/// "Q.npy" -> "Q.json".
-std::string sidecar_path(const std::string& npy_path);
-/// Reads Q.npy and its sidecar; throws InputError naming the file and the problem (missing
-/// sidecar, bad JSON, n that does not match, not float64 N x 3, NaN/inf).
-QuerySet load_query_set(const std::string& npy_path);
+/// "Q.npy" -> "Q.json"; likewise for Q.xyz and Q.csv.
+std::string sidecar_path(const std::string& points_path);
+/// The points of a query file, N x 3 in the file's order: .npy (read_points_npy), .xyz or .csv
+/// (read_points_text), told apart by the extension (any case). Throws InputError naming the file
+/// and the problem (another extension, a malformed file, NaN/inf).
+std::vector<Vec3d> read_query_points(const std::string& path);
+/// Reads a query file and its sidecar, if there is one; throws InputError naming the file and the
+/// problem (a malformed points file, a sidecar with bad JSON, without kind/n/seed, or with an n
+/// that does not match).
+QuerySet load_query_set(const std::string& points_path);
 /// Writes Q.npy and Q.json atomically; meta gets n and (if missing) created_by.
 void write_query_set(const std::string& npy_path, const std::vector<Vec3d>& points,
                      nlohmann::json meta);

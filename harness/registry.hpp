@@ -20,6 +20,16 @@ struct MethodInfo {
   std::vector<ParamSpec> params;
   std::function<std::unique_ptr<Method>(const Params&)> create;
   bool testing_only = false;  ///< hidden from default listings (fault injection)
+  /// The work counters (names as counters() reports them) whose values depend on the machine
+  /// as well as on the input: counts made inside a library that picks its kernels or its tree
+  /// layout from the processor at run time (Embree). Results record them with the machine
+  /// fingerprint (machine_fingerprint.hpp), and `compare` gates them exactly only against a
+  /// baseline made under the same fingerprint; elsewhere it reports them without failing.
+  /// Every counter not named here depends only on the input (mesh, query set, parameters) and the
+  /// build, and gates exactly on every machine. Default: none. That is the safe side for a gate:
+  /// a counter wrongly left portable fails the gate on the first other machine, loudly and by
+  /// name; one wrongly named here would silently stop gating on every other machine.
+  std::vector<std::string> machine_dependent_counters;
 };
 
 /// Extra `bvhbench` subcommands a method brings (e.g. `bvhbench ebp stats`). `setup` adds the

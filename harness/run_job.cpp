@@ -18,6 +18,7 @@
 #include "calibration.hpp"
 #include "commands.hpp"
 #include "errors.hpp"
+#include "machine_fingerprint.hpp"
 #include "mesh.hpp"
 #include "printable.hpp"
 #include "progress.hpp"
@@ -233,6 +234,9 @@ json run_job(const JobSpec& spec) {
     for (const Counter& c : method->counters())
       counters[c.name] = n ? double(c.value) / double(n) : 0.0;
     r["counters"] = counters;
+    // Which of them only compare exactly on a like machine, and the machine they were counted on.
+    r["machine_dependent"] = {{"counters", info->machine_dependent_counters},
+                              {"fingerprint", machine_fingerprint(method->machine_facts())}};
     std::size_t query_rss = current_rss_bytes();
 
     r["calibration"] = measure_calibration();
@@ -327,7 +331,10 @@ void add_run_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "Run one job: build one method on one mesh, replay one query set");
   cmd->add_option("--mesh", spec->mesh_path, "Mesh (PLY or OBJ)")->required();
   cmd->add_option("--method", spec->method_spec, "NAME or NAME:key=value,...")->required();
-  cmd->add_option("--queries", spec->queries_path, "Query set .npy (with its .json sidecar)")->required();
+  cmd->add_option("--queries", spec->queries_path,
+                  "Query set: .npy from bvhbench queries (with its .json sidecar), or points made "
+                  "elsewhere: .npy (float64/float32, N x 3) or .xyz/.csv text, one point a line")
+      ->required();
   cmd->add_option("--query", *query, "inside | distance")->check(CLI::IsMember({"inside", "distance"}));
   cmd->add_option("--repeat", spec->repeat, "Timed passes after the warm-up")->check(CLI::Range(1, 1000));
   cmd->add_option("--threads", spec->threads, "Thread budget")->check(CLI::Range(1, 1024));

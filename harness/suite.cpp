@@ -57,6 +57,7 @@ std::string format_number(double v) {
 }  // namespace
 
 std::string QueryPlan::label() const {
+  if (!file.empty()) return "file-" + name;
   std::string s = kind + "-n" + std::to_string(n) + "-s" + std::to_string(seed);
   if (!params.empty()) {
     std::string p;
@@ -115,6 +116,30 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
   return out;
 }
 
+// {file: PATH, name: NAME}: an existing points file as a query set. Two different files may not
+// share a name, since it is what tells their jobs apart.
+QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const fs::path& base,
+                          std::map<std::string, std::string>& labels) {
+  for (const char* key : {"kind", "n", "seed", "params"})
+    if (n[key]) yaml_error(suite, n, std::string("a points file ({file:, name:}) takes no '") + key + "'");
+  for (auto kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    if (key != "file" && key != "name") yaml_error(suite, n, "unknown key '" + key + "' of a points file");
+  }
+  QueryPlan q;
+  q.kind = "file";
+  q.file = scalar(suite, n["file"], "file");
+  if (q.file.empty()) yaml_error(suite, n, "file: is empty");
+  if (fs::path(q.file).is_relative()) q.file = (base / q.file).lexically_normal().string();
+  q.name = n["name"] ? scalar(suite, n["name"], "name") : fs::path(q.file).stem().string();
+  if (q.name.empty()) yaml_error(suite, n, "name: is empty");
+  auto [it, fresh] = labels.emplace(q.label(), q.file);
+  if (!fresh && it->second != q.file)
+    yaml_error(suite, n, "two points files are named '" + q.name + "' (" + it->second + " and " + q.file +
+                             "); give one a name: to tell their jobs apart");
+  return q;
+}
+
 }  // namespace
 
 SuiteConfig load_suite(const std::string& path) {
@@ -146,6 +171,7 @@ SuiteConfig load_suite(const std::string& path) {
     throw file_error(path, "missing 'matrices:' (a list of {meshes, queries, query, methods})");
 
   std::set<std::string> seen;
+  std::map<std::string, std::string> query_files;  // label -> file, across matrices
   for (auto m : matrices) {
     if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
     for (const char* key : {"meshes", "queries", "methods"})
@@ -168,21 +194,27 @@ SuiteConfig load_suite(const std::string& path) {
     std::vector<QueryPlan> queries;
     for (auto n : as_list(m["queries"])) {
       QueryPlan q;
+      if (n.IsMap() && n["file"]) {
+        queries.push_back(file_query_plan(path, n, base, query_files));
+        continue;
+      }
       try {
         if (n.IsScalar()) {
           q.kind = n.as<std::string>();
         } else if (n.IsMap()) {
+          if (n["name"]) yaml_error(path, n, "name: is for a points file ({file: PATH, name: NAME})");
           if (n["kind"]) q.kind = n["kind"].as<std::string>();
           if (n["n"]) q.n = n["n"].as<std::size_t>();
           if (n["seed"]) q.seed = n["seed"].as<std::uint64_t>();
           if (n["params"])
             for (auto kv : n["params"]) q.params[kv.first.as<std::string>()] = kv.second.as<double>();
         } else {
-          yaml_error(path, n, "a query set is a kind or {kind:, n:, seed:, params:}");
+          yaml_error(path, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
         }
       } catch (const YAML::Exception& e) {
         yaml_error(path, n, std::string("bad query set: ") + e.what());
       }
+      if (q.kind == "file") yaml_error(path, n, "a points file is given as {file: PATH}");
       if (!find_query_kind(q.kind)) yaml_error(path, n, "unknown query kind '" + q.kind + "'");
       if (q.n == 0) yaml_error(path, n, "n must be > 0");
       queries.push_back(q);
@@ -429,6 +461,18 @@ ChildOutcome run_child(const std::vector<std::string>& args, double timeout_s, d
   return out;
 }
 
+/// What a result says of its query set when the job left none: the plan. A points file has no
+/// n or seed until it is read.
+void set_planned_queries(json& r, const QueryPlan& q, bool with_seed) {
+  r["job"]["queries"]["kind"] = q.kind;
+  if (!q.file.empty()) {
+    r["job"]["queries"]["path"] = printable(q.file);
+    return;
+  }
+  r["job"]["queries"]["n"] = q.n;
+  if (with_seed) r["job"]["queries"]["seed"] = q.seed;
+}
+
 /// Status row for a job whose child left no result file.
 json status_row(const JobSpec& spec, const JobPlan& plan, const ChildOutcome& o, double timeout_s) {
   std::string code, msg;
@@ -456,9 +500,7 @@ json status_row(const JobSpec& spec, const JobPlan& plan, const ChildOutcome& o,
   json r = make_result(spec, code, msg);
   r["job"]["id"] = plan.id;
   r["job"]["mesh"]["name"] = plan.mesh.name;
-  r["job"]["queries"]["kind"] = plan.queries.kind;
-  r["job"]["queries"]["n"] = plan.queries.n;
-  r["job"]["queries"]["seed"] = plan.queries.seed;
+  set_planned_queries(r, plan.queries, true);
   r["elapsed_seconds"] = o.seconds;
   return r;
 }
@@ -503,7 +545,10 @@ void add_suite_command(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand("suite", "Run a YAML matrix of jobs, each in its own child process");
-  cmd->add_option("suite", o->file, "Suite file (suites/*.yml)")->required();
+  cmd->add_option("suite", o->file,
+                  "Suite file (suites/*.yml): meshes x query sets (generated, or points files given as "
+                  "{file: PATH}) x queries x methods; format in suites/README.md")
+      ->required();
   cmd->add_option("--out", o->out, "Result folder (results/NAME)")->required();
   cmd->add_flag("--resume", o->resume, "Skip jobs whose result is already written");
   cmd->add_option("--filter", o->filter, "Run only jobs whose id matches this regex");
@@ -556,6 +601,14 @@ void add_suite_command(CLI::App& app) {
     std::map<std::string, std::string> truths;                        // npy+mesh -> truth ("" = none)
     bool truth_unavailable = false;
     auto prepare_queries = [&](const JobPlan& j) -> std::pair<std::string, std::string> {
+      if (!j.queries.file.empty()) {
+        // Read by each job (a malformed file is its rejected_input); here only what would stop
+        // the oracle from hashing it.
+        std::error_code ec;
+        if (!fs::is_regular_file(j.queries.file, ec)) return {"", j.queries.file + ": points file not found"};
+        if (!std::ifstream(j.queries.file)) return {"", j.queries.file + ": points file cannot be read"};
+        return {j.queries.file, ""};
+      }
       std::string key = j.mesh.path + "|" + j.queries.label();
       auto it = qsets.find(key);
       if (it != qsets.end()) return it->second;
@@ -667,11 +720,10 @@ void add_suite_command(CLI::App& app) {
       spec.queries_path = npy;
       if (npy.empty()) {
         result = make_result(spec, qerr.find("exit code") == std::string::npos ? status::rejected_input : status::error,
-                             "query set could not be made: " + qerr);
+                             (j.queries.file.empty() ? "query set could not be made: " : "query set refused: ") + qerr);
         result["job"]["id"] = j.id;
         result["job"]["mesh"]["name"] = j.mesh.name;
-        result["job"]["queries"]["kind"] = j.queries.kind;
-        result["job"]["queries"]["n"] = j.queries.n;
+        set_planned_queries(result, j.queries, false);
       } else {
         spec.truth_path = prepare_truth(j, npy);
         if (g_interrupted) break;

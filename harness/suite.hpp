@@ -13,13 +13,16 @@
 
 namespace bvhbench {
 
-/// How to make one query set.
+/// How to make one query set, or which points file to take as one.
 struct QueryPlan {
-  std::string kind = "random";
+  std::string kind = "random";  ///< "file" for a points file
   std::size_t n = 10000;
   std::uint64_t seed = 1;
   std::map<std::string, double> params;
-  std::string label() const;  ///< "random-n10000-s1[-<hash of params>]"
+  std::string file;  ///< a points file (.npy, .xyz, .csv), resolved against the suite file's folder
+  std::string name;  ///< a points file's short name in job ids (default: its stem)
+  /// "random-n10000-s1[-<hash of params>]"; "file-<name>" for a points file.
+  std::string label() const;
 };
 
 struct MeshPlan {

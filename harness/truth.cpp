@@ -1,6 +1,6 @@
-// `bvhbench truth --mesh M --queries Q.npy --out T.npz [--threads N]`: the exact oracle's answers
-// for a query set (definitions in oracle.hpp, file layout in docs/results.md). Not benchmarked,
-// so it uses every core unless told otherwise.
+// `bvhbench truth --mesh M --queries Q --out T.npz [--threads N]`: the exact oracle's answers for
+// a query set (Q.npy, Q.xyz or Q.csv; definitions in oracle.hpp, file layout in
+// docs/results.md). Not benchmarked, so it uses every core unless told otherwise.
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -12,10 +12,9 @@
 #include "commands.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
-#include "npy.hpp"
 #include "oracle.hpp"
 #include "progress.hpp"
-#include "sha256.hpp"
+#include "query_set.hpp"
 
 namespace bvhbench {
 
@@ -30,7 +29,10 @@ void add_truth_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("truth", "Compute exact oracle answers (inside, winding, distance, closest "
                                           "triangle with ties) for a query set");
   cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
-  cmd->add_option("--queries", o->queries, "Query set .npy (float64, N x 3)")->required();
+  cmd->add_option("--queries", o->queries,
+                  "Query set: .npy (float64/float32, N x 3) or .xyz/.csv text, one point a line; a "
+                  ".json sidecar beside it is optional")
+      ->required();
   cmd->add_option("--out", o->out, "Oracle file .npz")->required();
   cmd->add_option("--threads", o->threads, "Threads (default: all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--tie-tolerance", o->tie_tolerance,
@@ -43,8 +45,9 @@ void add_truth_command(CLI::App& app) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     const bool verbose = !o->quiet;
     auto t0 = Clock::now();
-    const std::vector<Vec3d> pts = read_points_npy(o->queries);
-    const std::string qsha = sha256_file(o->queries);
+    const QuerySet queries = load_query_set(o->queries);
+    const std::vector<Vec3d>& pts = queries.points;
+    const std::string& qsha = queries.sha256;
     Mesh mesh = load_mesh(o->mesh);
     auto t1 = Clock::now();
     Oracle oracle(mesh, o->tie_tolerance, verbose);

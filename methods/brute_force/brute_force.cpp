@@ -83,6 +83,7 @@ void bvhbench_register_brute_force(bvhbench::Registry& r) {
   m.name = "brute_force";
   m.description = "Exact reference: every triangle per query, double precision; inside by the generalized winding number";
   m.caps = {true, true, true, false, false};
+  m.machine_dependent_counters = {};  // none: our own loop over every triangle, no library
   m.params = {{"winding_threshold", ParamType::real, "0.5",
                "inside iff the generalized winding number exceeds this", {}, 0.0, 1.0}};
   m.create = [](const Params& p) { return std::make_unique<BruteForce>(p); };

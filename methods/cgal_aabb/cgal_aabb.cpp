@@ -356,6 +356,11 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
       "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
       "Side_of_triangle_mesh's ray parity on the same tree";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // None: CGAL is header-only and compiled here with our flags, with no run-time CPU dispatch;
+  // the traversal and its filtered predicates run in plain double (interval filters under our
+  // rounding mode) and fall back to GMP (Debian's is not a "fat" build, and an exact fallback
+  // gives the same answer on any kernel). The counts depend on the input and the build alone.
+  m.machine_dependent_counters = {};
   m.params = {
       {"kernel", ParamType::choice, "epick",
        "geometric kernel: epick (exact predicates) or simple_cartesian (Simple_cartesian<double>)",

@@ -216,6 +216,7 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
       "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
       "winding-number crossings, branch-and-bound distance";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, /*out_of_core*/ true};
+  m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core: ebp_cli.cpp

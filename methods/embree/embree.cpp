@@ -259,6 +259,18 @@ class Embree final : public Method {
     triangles_tested_ = point_queries_ = rays_shot_ = hits_reported_ = undecided_ = 0;
   }
 
+  /// Embree 3 does not say which ISA it dispatched to (AVX or AVX2), but its native ray packet
+  /// widths say the vector width of the kernels it enabled: 4 (SSE), 8 (AVX, AVX2), 16
+  /// (AVX-512), after the CPU, the ISAs compiled into the library and any `isa=` configuration.
+  nlohmann::json machine_facts() const override {
+    if (!device_) return nlohmann::json::object();
+    std::vector<int> widths;
+    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) widths.push_back(4);
+    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) widths.push_back(8);
+    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) widths.push_back(16);
+    return {{"embree_native_ray_widths", widths}};
+  }
+
   nlohmann::json info() const override {
     return {{"triangles", triangles_.size()},
             {"degenerate_triangles", degenerate_count_},
@@ -378,6 +390,30 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
       "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
       "by all-hits ray parity with jittered re-shots and majority vote";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // Embree picks its kernels (SSE2, SSE4.2, AVX, AVX2, AVX-512) from the processor when the
+  // device is made, and with them the BVH it builds (BVH8 where it may use AVX, else BVH4; on
+  // Intel also by CPU model) and the float arithmetic of its tests (AVX2 and AVX-512 kernels
+  // fuse multiply-adds, SSE and AVX ones do not). Forcing each ISA on one AVX-512 machine
+  // (device config isa=avx512|avx2|avx|sse4.2|sse2) over the CI meshes, query sets and the
+  // parameters quality, robust, rays and coherent moved triangles_tested in every distance job
+  // and nothing else. Counter by counter:
+  m.machine_dependent_counters = {
+      // The candidates Embree's traversal hands to our callback: which leaves it opens, in which
+      // order, and so how soon the radius shrinks, follow the BVH's layout and width.
+      "triangles_tested",
+      // Every crossing the filter sees, once per leaf reference of the triangle: spatial splits
+      // (quality=high) duplicate references by the builder's layout, and with robust=false an
+      // edge crossing is reported by both neighbours or neither by the kernel's rounding.
+      "ray_hits_reported",
+      // A vote is re-shot when a hit's barycentrics, computed by Embree's kernel, lie within
+      // kEdgeEps of an edge: a fused or unfused multiply-add moves a hit across that line. Rare
+      // (unchanged across the five ISAs above), but decided by the machine, not by the input.
+      "rays_shot",
+      "undecided",  // the votes whose every re-shot was near an edge: the same decision
+  };
+  // point_queries is ours alone: one rtcPointQuery per distance query, plus one only when a
+  // coherent seed radius found nothing, which the margin in search_radius() rules out whatever
+  // the rounding of Embree's box tests (a change is a broken margin, worth failing the gate).
   m.params = {
       {"quality", ParamType::choice, "medium", "BVH build quality (high = spatial splits)",
        {"low", "medium", "high"}},

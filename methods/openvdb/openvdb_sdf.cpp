@@ -418,6 +418,11 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       "OpenVDB signed distance field (meshToVolume): sampled distance, gradient normal and "
       "projection, inside by sign, closest triangle from the polygon-index grid";
   m.caps = {true, true, true, false, false};
+  // None: our counters count our own samples of the grid, whose values meshToVolume computes in
+  // header templates compiled here (no run-time CPU dispatch: OPENVDB_USE_SSE42/AVX are
+  // compile-time switches, off; libopenvdb itself has no CPUID or ifunc). Each voxel's distance
+  // is a minimum over triangles, the same however TBB splits the work.
+  m.machine_dependent_counters = {};
   m.params = {
       {"voxel", ParamType::real, "1.0", "voxel size relative to the mean edge length", {}, 1e-6, 1e6},
       {"voxel_abs", ParamType::real, "0", "absolute voxel size (world units); overrides voxel when > 0", {}, 0.0, 1e308},

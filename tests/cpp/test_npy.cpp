@@ -14,6 +14,7 @@
 
 #include "errors.hpp"
 #include "npy.hpp"
+#include "npz.hpp"
 #include "test_support.hpp"
 
 using namespace bvhbench;
@@ -175,6 +176,33 @@ TEST(NpyNumpy, ReadsNpyFiles) {
   EXPECT_EQ(values<double>(be), (std::vector<double>{1.0, -2.0, 0.5}));
 }
 
+// A bare query-set .npy: float64 or float32, either byte order, C or Fortran order.
+TEST(NpyNumpy, ReadsPointsInEveryForm) {
+  const std::vector<Vec3d> pts = {{0, 1, 2}, {-1.5, 0.25, 1e-3}, {3, 4, 5}, {0.1, 0.2, 0.3}};
+  // The float32 values, exactly as double. Through a volatile: GCC 12's SLP vectorizer at -O3
+  // folds the pair double(float(x)), double(float(y)) to x, y.
+  auto f4 = [](double v) {
+    volatile float f = float(v);
+    return double(f);
+  };
+  std::vector<Vec3d> widened;
+  for (const Vec3d& p : pts) widened.push_back(Vec3d(f4(p.x), f4(p.y), f4(p.z)));
+  ASSERT_NE(widened, pts);
+  for (const char* name : {"points.npy", "points_v2.npy", "points_f8_be.npy", "points_fortran.npy"})
+    EXPECT_EQ(read_points_npy(fixture(name)), pts) << name;
+  for (const char* name : {"points_f4.npy", "points_f4_be.npy", "points_f4_fortran_be.npy"})
+    EXPECT_EQ(read_points_npy(fixture(name)), widened) << name;
+}
+
+TEST(NpyNumpy, FortranOrderOnlyWhenAsked) {
+  const NpyArray a = read_npy(fixture("points_fortran.npy"), NpyOrder::c_or_fortran);
+  EXPECT_TRUE(a.fortran_order);
+  EXPECT_EQ(a.shape, (std::vector<std::size_t>{4, 3}));
+  EXPECT_EQ(values<double>(a)[1], -1.5);  // column-major: the second value is point 1's x
+  EXPECT_FALSE(read_npy(fixture("points.npy"), NpyOrder::c_or_fortran).fortran_order);
+  EXPECT_THROW(npy_bytes(a), std::invalid_argument);  // we write C order only
+}
+
 TEST(NpyNumpy, OurNpyBytesEqualNumpys) {
   // np.save of the same (4, 3) float64 array: identical bytes, header included.
   const std::vector<Vec3d> pts = {{0, 1, 2}, {-1.5, 0.25, 1e-3}, {3, 4, 5}, {0.1, 0.2, 0.3}};
@@ -211,11 +239,30 @@ TEST(NpyNumpy, NumpyReadsOurNpz) {
   std::remove(npy.c_str());
 }
 
+// An entry larger than the reader's input buffer: inflated in many pieces, straight into the array.
+TEST(NpyNumpy, ReadsALargeSavezCompressed) {
+  if (!have_numpy()) GTEST_SKIP() << "python3 with numpy not available";
+  const std::string path = temp_path("large.npz");
+  const std::string cmd = "python3 -c \"import numpy as np; i = np.arange(600000, dtype=np.int64); "
+                          "np.savez_compressed('" + path + "', a=(i * 2654435761 % 1000003).astype(np.float64), "
+                          "b=np.ones(3))\"";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto z = read_npz(path);
+  const std::vector<double> a = values<double>(z.at("a"));
+  ASSERT_EQ(a.size(), 600000u);
+  for (std::int64_t i = 0; i < 600000; ++i)
+    ASSERT_EQ(a[std::size_t(i)], double(i * 2654435761 % 1000003)) << i;
+  EXPECT_EQ(values<double>(z.at("b")), (std::vector<double>{1, 1, 1}));
+  std::remove(path.c_str());
+}
+
 // ---- malformed ----
 
 TEST(NpyRejects, PointsWithTheWrongDtypeOrShape) {
-  expect_input_error([] { read_points_npy(fixture("points_f4.npy")); }, "points_f4.npy", "dtype <f4 and shape (4, 3)");
+  expect_input_error([] { read_points_npy(fixture("points_i8.npy")); }, "points_i8.npy", "dtype <i8 and shape (4, 3)");
   expect_input_error([] { read_points_npy(fixture("points_n4.npy")); }, "points_n4.npy", "dtype <f8 and shape (2, 4)");
+  expect_input_error([] { read_points_npy(fixture("points_3d.npy")); }, "points_3d.npy", "shape (4, 3, 1)");
+  expect_input_error([] { read_points_npy(fixture("big_endian.npy")); }, "big_endian.npy", "shape (3,)");
 }
 TEST(NpyRejects, NanPoint) {
   expect_input_error([] { read_points_npy(fixture("points_nan.npy")); }, "points_nan.npy", "point 1 has a NaN coordinate");
@@ -242,6 +289,30 @@ TEST(NpyRejects, TruncatedNpz) {
 TEST(NpyRejects, CorruptNpz) {
   expect_input_error([] { read_npz(fixture("bad_crc.npz")); }, "bad_crc.npz", "CRC-32 mismatch");
 }
+// Deflated entries: what zlib reports, and sizes in the directory that the stream belies. Each
+// message names the file and the entry.
+TEST(NpzDeflate, ReadsAGoodEntry) {
+  const auto z = read_npz(fixture("deflate_good.npz"));
+  ASSERT_EQ(z.size(), 1u);
+  EXPECT_EQ(values<double>(z.at("a"))[3], -1.5);
+}
+TEST(NpzDeflate, CorruptStream) {
+  expect_input_error([] { read_npz(fixture("deflate_corrupt.npz")); }, "deflate_corrupt.npz (entry 'a.npy')",
+                     "corrupt compressed data (zlib: invalid block type)");
+}
+TEST(NpzDeflate, TruncatedStream) {
+  expect_input_error([] { read_npz(fixture("deflate_truncated.npz")); }, "deflate_truncated.npz (entry 'a.npy')",
+                     "truncated compressed data");
+}
+TEST(NpzDeflate, StreamShorterThanTheDirectorySays) {
+  expect_input_error([] { read_npz(fixture("deflate_short.npz")); }, "deflate_short.npz (entry 'a.npy')",
+                     "inflates to 216 bytes, fewer than the 224 the directory says");
+}
+TEST(NpzDeflate, StreamLongerThanTheDirectorySays) {
+  expect_input_error([] { read_npz(fixture("deflate_long.npz")); }, "deflate_long.npz (entry 'a.npy')",
+                     "inflates to more than the 224 bytes the directory says");
+}
+
 TEST(NpyRejects, NpyGivenAsNpz) {
   expect_input_error([] { read_npz(fixture("points.npy")); }, "points.npy", "not an .npz");
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "errors.hpp"
 #include "sha256.hpp"
@@ -73,4 +74,26 @@ TEST(Sha256, MissingFileIsInputError) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/file.ply"), std::string::npos);
   }
+}
+
+TEST(Sha256, DigestStartsOver) {
+  Sha256 s;
+  s.update("xyz", 3);
+  s.hex_digest();
+  s.update("abc", 3);
+  EXPECT_EQ(s.hex_digest(), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(s.hex_digest(), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+}
+
+TEST(Sha256, MovedHashKeepsItsState) {
+  Sha256 a;
+  a.update("ab", 2);
+  Sha256 b(std::move(a));
+  b.update("c", 1);
+  EXPECT_EQ(b.hex_digest(), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  Sha256 c;
+  c.update("junk", 4);
+  c = std::move(b);
+  c.update(kMsg448, 56);
+  EXPECT_EQ(c.hex_digest(), "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
 }

@@ -137,14 +137,17 @@ def test_bad_input_files_exit_2(bvhbench, shared_meshes, cow_queries, tmp_path):
     _expect_exit_2(run(bvhbench, "run", "--mesh", bad_ply, "--method", "brute_force", "--queries", cow_queries),
                    "truncated.ply")
 
-    # Query files: not float64 Nx3, missing sidecar, n mismatch, NaN.
+    # Query files: not N x 3, a sidecar without a key, n mismatch, NaN. (Without a sidecar a
+    # points file is a query set of kind `file`: tests/python/test_points_files.py.)
     bad = tmp_path / "bad.npy"
     np.save(bad, np.zeros((4, 2)))
     (tmp_path / "bad.json").write_text(json.dumps({"kind": "random", "n": 4, "seed": 1}))
     _expect_exit_2(run(bvhbench, "run", "--mesh", cow, "--method", "brute_force", "--queries", bad), "bad.npy")
-    nos = tmp_path / "nosidecar.npy"
-    np.save(nos, np.zeros((4, 3)))
-    _expect_exit_2(run(bvhbench, "run", "--mesh", cow, "--method", "brute_force", "--queries", nos), "nosidecar.json")
+    noseed = tmp_path / "noseed.npy"
+    np.save(noseed, np.zeros((4, 3)))
+    (tmp_path / "noseed.json").write_text(json.dumps({"kind": "random", "n": 4}))
+    _expect_exit_2(run(bvhbench, "run", "--mesh", cow, "--method", "brute_force", "--queries", noseed),
+                   "noseed.json")
     mism = tmp_path / "mism.npy"
     np.save(mism, np.zeros((4, 3)))
     (tmp_path / "mism.json").write_text(json.dumps({"kind": "random", "n": 5, "seed": 1}))
