@@ -33,6 +33,9 @@ RERUN = ["cow__random-n500-s1__inside__ebp_octree",
          "cow__random-n500-s1__inside__fault_mode=crash"]
 # Where a fresh run writes its query sets and oracle files: not the fixture's identity.
 RUN_PATHS = {"job.queries.path", "job.truth"}
+# Blocks that describe the machine a job ran on (their keys differ from one processor to
+# another): compared as one key, not inside.
+MACHINE_DESCRIBED = {"machine_dependent.fingerprint"}
 
 
 def committed():
@@ -49,9 +52,10 @@ def summary_csv(path):
 
 
 def key_paths(value, prefix=""):
-    """Every dotted key path of nested objects ('queries.latency_ns.p99'); lists are leaves."""
+    """Every dotted key path of nested objects ('queries.latency_ns.p99'); lists and the
+    MACHINE_DESCRIBED blocks are leaves."""
     out = set()
-    if isinstance(value, dict):
+    if isinstance(value, dict) and prefix not in MACHINE_DESCRIBED:
         for k, v in value.items():
             path = f"{prefix}.{k}" if prefix else k
             out.add(path)
