@@ -21,7 +21,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = Path("tests") / "fixtures" / "results_small.yml"     # relative to ROOT, as make_fixture
 FIXTURE = ROOT / "tests" / "fixtures" / "results_small"
-REGENERATE = "run `python3 tests/fixtures/results_small/make_fixture.py` and commit the result"
+REGENERATE = "run `make fixture` (tests/fixtures/results_small/make_fixture.py) and commit the result"
 
 # Re-run: an ok job of each method (inside and distance), and a status row of a crashed child.
 RERUN = ["cow__random-n500-s1__inside__ebp_octree",
