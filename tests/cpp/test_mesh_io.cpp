@@ -31,7 +31,7 @@ const std::vector<Tri> kSquareAndTri = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4}};
 void expect_square_and_tri(const Mesh& m, bool float_coords) {
   ASSERT_EQ(m.vertices.size(), 5u);
   EXPECT_EQ(m.triangles, kSquareAndTri);
-  EXPECT_EQ(m.input_polygons, 2u);
+  EXPECT_EQ(m.file.polygons, 2u);
   EXPECT_EQ(m.vertices[0], Vec3d(0, 0, 0));
   EXPECT_EQ(m.vertices[1], Vec3d(1, 0, 0));
   EXPECT_EQ(m.vertices[2], Vec3d(1, 1, 0));
@@ -80,7 +80,7 @@ TEST(MeshIo, ObjFaceFormsNegativeIndicesContinuationAndPolygon) {
   EXPECT_EQ(m.vertices[6], Vec3d(2, 1, 0));
   const std::vector<Tri> expected = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4}, {0, 1, 4}, {1, 5, 6}, {1, 6, 2}, {1, 2, 3}};
   EXPECT_EQ(m.triangles, expected);
-  EXPECT_EQ(m.input_polygons, 4u);
+  EXPECT_EQ(m.file.polygons, 4u);
 }
 
 TEST(MeshIo, CrlfLineEndings) {
@@ -166,7 +166,7 @@ TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
     ASSERT_EQ(r.vertices.size(), m.vertices.size());
     for (std::size_t i = 0; i < m.vertices.size(); ++i)
       for (int k = 0; k < 3; ++k) EXPECT_EQ(r.vertices[i][k], double(float(m.vertices[i][k])));
-    EXPECT_EQ(r.input_polygons, 3u);
+    EXPECT_EQ(r.file.polygons, 3u);
     std::ifstream tmp(path + ".tmp");
     EXPECT_FALSE(tmp.good()) << "the temporary file was left behind";
     std::remove(path.c_str());
