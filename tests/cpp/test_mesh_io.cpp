@@ -12,6 +12,7 @@
 
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "mesh_reader.hpp"
 #include "sha256.hpp"
 #include "test_support.hpp"
 
@@ -50,6 +51,45 @@ void expect_rejected(const std::string& name, const std::string& problem) {
 }
 
 std::string temp_path(const std::string& name) { return testing::TempDir() + "bvhbench_mesh_io_" + name; }
+
+/// Appends the low `size` bytes of v in the given byte order.
+void put_int(std::string& s, std::uint64_t v, int size, bool big) {
+  for (int i = 0; i < size; ++i) s += char((v >> (8 * (big ? size - 1 - i : i))) & 0xff);
+}
+
+void put_float(std::string& s, float f, bool big) {
+  std::uint32_t u;
+  std::memcpy(&u, &f, 4);
+  put_int(s, u, 4, big);
+}
+
+/// The integer types of the PLY spec with their sizes.
+struct IntType {
+  const char* name;
+  int size;
+  bool is_signed;
+};
+const IntType kIntTypes[] = {{"char", 1, true},  {"uchar", 1, false}, {"short", 2, true},  {"ushort", 2, false},
+                             {"int", 4, true},   {"uint", 4, false},  {"int8", 1, true},   {"uint8", 1, false},
+                             {"int16", 2, true}, {"uint32", 4, false}};
+
+/// A binary PLY with the five vertices of the fixtures and one `tristrips` item of `strip`
+/// (-1 written as every bit set, whatever the type).
+std::string strip_ply(const std::vector<long long>& strip, const IntType& count, const IntType& index, bool big) {
+  std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                  " 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element tristrips 1\nproperty list " + count.name + " " + index.name +
+                  " vertex_indices\nend_header\n";
+  const float xyz[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.1f, 0.2f, 0.3f}};
+  for (auto& v : xyz)
+    for (float c : v) put_float(s, c, big);
+  put_int(s, strip.size(), count.size, big);
+  for (long long i : strip) put_int(s, std::uint64_t(i), index.size, big);
+  return s;
+}
+
+/// What the fixtures' strips give: the square and the triangle, the first started at vertex 1.
+const std::vector<Tri> kStripSquareAndTri = {{1, 2, 0}, {0, 2, 3}, {0, 1, 4}};
 
 }  // namespace
 
@@ -118,15 +158,10 @@ TEST(MeshIo, ExtensionIsCaseInsensitive) {
 // Every count type and index type of the PLY spec, in both byte orders, through both the fast
 // and the generic binary paths (triangles, then a quad that leaves the fast path).
 TEST(MeshIo, BinaryPlyEveryIntegerTypeAndByteOrder) {
-  struct Type { const char* name; int size; };
-  const Type types[] = {{"char", 1}, {"uchar", 1}, {"short", 2}, {"ushort", 2}, {"int", 4},
-                        {"uint", 4}, {"int8", 1},  {"uint8", 1}, {"int16", 2}, {"uint32", 4}};
-  auto put = [](std::string& s, std::uint64_t v, int size, bool big) {
-    for (int i = 0; i < size; ++i) s += char((v >> (8 * (big ? size - 1 - i : i))) & 0xff);
-  };
+  const auto put = put_int;
   for (bool big : {false, true})
-    for (const Type& ct : types)
-      for (const Type& it : types) {
+    for (const IntType& ct : kIntTypes)
+      for (const IntType& it : kIntTypes) {
         SCOPED_TRACE(std::string(big ? "BE " : "LE ") + ct.name + " " + it.name);
         std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
                         " 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
@@ -151,6 +186,138 @@ TEST(MeshIo, BinaryPlyEveryIntegerTypeAndByteOrder) {
         EXPECT_EQ(m.vertices[4], Vec3d(double(0.1f), double(0.2f), double(0.3f)));
         std::remove(path.c_str());
       }
+}
+
+// ---- triangle strips ----
+
+TEST(MeshIo, TristripsBigEndianWithExtraVertexProperties) {
+  const Mesh m = load_mesh(fixture("good_tristrips_be.ply"));
+  ASSERT_EQ(m.vertices.size(), 5u);
+  EXPECT_EQ(m.vertices[4], Vec3d(double(0.1f), double(0.2f), double(0.3f)));
+  EXPECT_EQ(m.triangles, kStripSquareAndTri);
+  EXPECT_EQ(m.file.format, "ply");
+  EXPECT_EQ(m.file.variant, "binary_big_endian");
+  EXPECT_EQ(m.file.strips, 2u);               // 1 2 0 3 | 0 0 0 1 4
+  EXPECT_EQ(m.file.strip_joins_dropped, 2u);  // (0,0,0) and (0,0,1)
+  EXPECT_EQ(m.file.polygons, 0u);
+  EXPECT_EQ(m.sha256, sha256_file(m.path));
+}
+
+TEST(MeshIo, TristripsAsciiBesideAFaceElement) {
+  const Mesh m = load_mesh(fixture("good_tristrips_ascii.ply"));
+  EXPECT_EQ(m.triangles, kSquareAndTri);  // the face's two triangles first, in element order
+  EXPECT_EQ(m.file.polygons, 1u);
+  EXPECT_EQ(m.file.polygons_triangulated, 1u);
+  EXPECT_EQ(m.file.strips, 1u);  // the -1 at both ends and the empty list make no strip
+  EXPECT_EQ(m.file.strip_joins_dropped, 0u);
+}
+
+// Triangle k of a strip is (v[k], v[k+1], v[k+2]), every odd one flipped to (v[k+1], v[k], v[k+2]):
+// on a planar zigzag every triangle then faces the same way (+z).
+TEST(MeshIo, TristripsKeepTheWindingAlongAStrip) {
+  std::string s = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                  "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+  for (int i = 0; i < 4; ++i) s += std::to_string(i) + " 0 0\n" + std::to_string(i) + " 1 0\n";
+  s += "8 0 1 2 3 4 5 6 7\n";  // bottom and top row alternate: (0,1,2) (2,1,3) (2,3,4) ...
+  const Mesh m = load_mesh_bytes(s, "zigzag.ply", "ply");
+  ASSERT_EQ(m.triangles.size(), 6u);
+  EXPECT_EQ(m.triangles[0], (Tri{0, 1, 2}));
+  EXPECT_EQ(m.triangles[1], (Tri{2, 1, 3}));
+  EXPECT_EQ(m.triangles[2], (Tri{2, 3, 4}));
+  EXPECT_EQ(m.triangles[3], (Tri{4, 3, 5}));
+  for (const Tri& t : m.triangles) {
+    const Vec3d n = cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
+    EXPECT_LT(n.z, 0.0) << t[0] << " " << t[1] << " " << t[2];  // (0,1,2) turns clockwise seen from +z
+  }
+  EXPECT_EQ(m.file.strips, 1u);
+}
+
+// Only a repeated index makes a join: three distinct collinear vertices are a (degenerate) triangle
+// like any other, kept.
+TEST(MeshIo, TristripsKeepDegenerateTrianglesOfDistinctVertices) {
+  const Mesh m = load_mesh_bytes("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement tristrips 1\nproperty list int int vertex_indices\n"
+                                 "end_header\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n", "collinear.ply");
+  EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 2}}));
+  EXPECT_EQ(m.file.strip_joins_dropped, 0u);
+}
+
+// Every count type and index type, both byte orders: -1 (every bit set, so 255 for uchar) restarts.
+TEST(MeshIo, TristripsEveryIntegerTypeAndByteOrder) {
+  for (bool big : {false, true})
+    for (const IntType& ct : kIntTypes)
+      for (const IntType& it : kIntTypes) {
+        SCOPED_TRACE(std::string(big ? "BE " : "LE ") + ct.name + " " + it.name);
+        const Mesh m = load_mesh_bytes(strip_ply({1, 2, 0, 3, -1, 0, 0, 0, 1, 4}, ct, it, big), "types.ply");
+        EXPECT_EQ(m.triangles, kStripSquareAndTri);
+        EXPECT_EQ(m.file.strips, 2u);
+        EXPECT_EQ(m.file.strip_joins_dropped, 2u);
+      }
+}
+
+// A strip item before the vertex element and a face element after it: triangles in file order,
+// the same on every pass.
+TEST(MeshIo, TristripsBeforeTheVerticesAndFacesAfter) {
+  const std::string s = "ply\nformat ascii 1.0\nelement tristrips 1\nproperty list int int vertex_indices\n"
+                        "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                        "4 1 2 0 3\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.1 0.2 0.3\n3 0 1 4\n";
+  auto reader = MeshReader::open_bytes(s, "order.ply", "ply");
+  reader->read_vertices([](std::uint64_t, const Vec3d*, std::size_t) {});
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<Tri> got;
+    reader->read_triangles([&](std::uint64_t first, const Triangle* t, std::size_t n) {
+      EXPECT_EQ(first, got.size());
+      got.insert(got.end(), t, t + n);
+    });
+    EXPECT_EQ(got, kStripSquareAndTri) << "pass " << pass;
+    EXPECT_EQ(reader->info().strips, 1u);
+    EXPECT_EQ(reader->info().polygons, 1u);
+  }
+}
+
+// One strip of 3M indices (12 MB, more than the 8 MiB read buffer): streamed in pieces, never
+// held whole; every triangle of a grid of rows joined by degenerate triangles.
+TEST(MeshIo, LongStripCrossesBufferBoundaries) {
+  const std::uint32_t cols = 1000, rows = 1500;  // (rows + 1) x cols vertices
+  std::vector<long long> strip;
+  for (std::uint32_t r = 0; r < rows; ++r) {
+    if (r > 0) {  // join: repeat the last index and the next row's first, keeping even parity
+      strip.push_back(strip.back());
+      strip.push_back(std::int64_t(r) * cols);
+    }
+    for (std::uint32_t c = 0; c < cols; ++c) {
+      strip.push_back(std::int64_t(r) * cols + c);
+      strip.push_back(std::int64_t(r + 1) * cols + c);
+    }
+  }
+  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string((rows + 1) * cols) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nelement tristrips 1\n"
+                  "property list uint uint vertex_indices\nend_header\n";
+  for (std::uint32_t r = 0; r <= rows; ++r)
+    for (std::uint32_t c = 0; c < cols; ++c) {
+      put_float(s, float(c), false);
+      put_float(s, float(r), false);
+      put_float(s, 0.f, false);
+    }
+  put_int(s, strip.size(), 4, false);
+  for (long long i : strip) put_int(s, std::uint64_t(i), 4, false);
+  ASSERT_GT(s.size(), std::size_t(12) << 20);
+  const std::string path = temp_path("long_strip.ply");
+  write_file_bytes(path, s);
+  const Mesh m = load_mesh(path);
+  std::remove(path.c_str());
+  EXPECT_EQ(m.triangles.size(), std::size_t(rows) * (2 * cols - 2));
+  EXPECT_EQ(m.file.strip_joins_dropped, std::size_t(rows - 1) * 4);
+  std::size_t facing_down = 0;
+  for (const Tri& t : m.triangles) {
+    const Vec3d n = cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
+    if (n.z < 0) ++facing_down;
+  }
+  EXPECT_EQ(facing_down, m.triangles.size()) << "one orientation along the whole strip";
+  // The last triangle is an odd one of its row: (v[k+1], v[k], v[k+2]).
+  EXPECT_EQ(m.triangles.back(), (Tri{rows * cols - 1, (rows + 1) * cols - 2, (rows + 1) * cols - 1}));
+  EXPECT_EQ(m.sha256, sha256_hex(s.data(), s.size()));
 }
 
 TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
@@ -272,13 +439,28 @@ TEST(MeshIoRejects, EmptyFile) { expect_rejected("bad_empty_file.obj", "no trian
 TEST(MeshIoRejects, TwoVertexFacePly) { expect_rejected("bad_two_vertex_face.ply", "face 0 has 2 vertices"); }
 TEST(MeshIoRejects, TwoVertexFaceObj) { expect_rejected("bad_two_vertex_face.obj", "face 1 has 2 vertices"); }
 
+TEST(MeshIoRejects, TristripIndexOutOfRange) {
+  expect_rejected("bad_tristrips_index.ply", "tristrips 0 has vertex index 9 out of range (the header declares 4 vertices)");
+}
+TEST(MeshIoRejects, TristripTruncated) {
+  expect_rejected("bad_tristrips_truncated.ply", "truncated: the file ends in tristrips 0 of 1");
+}
+TEST(MeshIoRejects, TristripsOfJoinsOnly) { expect_rejected("bad_tristrips_only_joins.ply", "no triangles"); }
+TEST(MeshIoRejects, TristripFloatIndices) {
+  expect_input_error([] { load_mesh_bytes("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                          "property float z\nelement tristrips 1\nproperty list int float vertex_indices\n"
+                                          "end_header\n0\n", "f.ply"); },
+                     "f.ply", "strip vertex indices have a floating-point type");
+}
+
 TEST(MeshIoRejects, GarbageNumberPly) { expect_rejected("bad_garbage_number.ply", "'zero' is not a number"); }
 TEST(MeshIoRejects, GarbageNumberObj) { expect_rejected("bad_garbage_number.obj", "'1.0abc' is not a number"); }
 TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", "'two' is not a vertex reference"); }
 
 // Prefixes of good files are rejected cleanly or read consistently (never a crash or a hang).
 TEST(MeshIoRejects, EveryTruncationOfABinaryFile) {
-  for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj"}) {
+  for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj",
+                           "good_tristrips_be.ply", "good_tristrips_ascii.ply"}) {
     const std::string bytes = read_file_bytes(fixture(name));
     const std::string ext = std::string(name).substr(std::string(name).rfind('.'));
     const std::string path = temp_path("prefix" + ext);
