@@ -16,7 +16,7 @@ namespace bvhbench {
 
 namespace {
 
-const char* const kKnownFormats = "expected a PLY or OBJ file";
+const char* const kKnownFormats = "expected a PLY, OBJ or STL file";
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -32,16 +32,20 @@ std::string format_name(const std::string& format_or_path) {
   return lower(format_or_path.substr(dot + 1));
 }
 
-bool known(const std::string& f) { return f == "ply" || f == "obj"; }
+bool known(const std::string& f) { return f == "ply" || f == "obj" || f == "stl"; }
 
-/// The format of an input whose name says nothing: PLY has a magic line; OBJ is text starting
-/// with a known statement or a comment.
+/// The format of an input whose name says nothing: PLY has a magic line; a binary STL has the
+/// size its header declares, an ASCII STL starts with "solid"; OBJ is text starting with a known
+/// statement or a comment.
 std::string sniff(ByteSource& src) {
   src.fill(std::size_t(std::min<std::uint64_t>(src.size(), 256)));
-  const std::string_view head(src.p, src.avail());
+  std::string_view head(src.p, src.avail());
   if (head.substr(0, 4) == "ply\n" || head.substr(0, 4) == "ply\r") return "ply";
+  if (stl_binary_size_matches(src)) return "stl";
+  head = std::string_view(src.p, src.avail());  // fill() may have moved the bytes
   std::string_view rest = head;
   const std::string_view kw = next_token(rest);
+  if (kw == "solid") return "stl";
   const bool text = head.find('\0') == std::string_view::npos;
   if (text && (kw == "v" || kw == "vt" || kw == "vn" || kw == "f" || kw == "o" || kw == "g" || kw == "mtllib" ||
                kw == "usemtl" || kw == "s" || (!kw.empty() && kw[0] == '#')))
@@ -57,6 +61,8 @@ MeshReader::MeshReader(std::unique_ptr<ByteSource> src, std::string format) : sr
   if (format.empty()) throw file_error(src_->name(), std::string("unknown mesh format (") + kKnownFormats + ")");
   if (format == "ply")
     parser_ = make_ply_parser(*src_);
+  else if (format == "stl")
+    parser_ = make_stl_parser(*src_);
   else
     parser_ = make_obj_parser(*src_);
   parser_->read_header();

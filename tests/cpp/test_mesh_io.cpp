@@ -29,10 +29,10 @@ using Tri = std::array<std::uint32_t, 3>;
 /// first edge, fan-triangulated.
 const std::vector<Tri> kSquareAndTri = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4}};
 
-void expect_square_and_tri(const Mesh& m, bool float_coords) {
+void expect_square_and_tri(const Mesh& m, bool float_coords, std::uint64_t polygons = 2) {
   ASSERT_EQ(m.vertices.size(), 5u);
   EXPECT_EQ(m.triangles, kSquareAndTri);
-  EXPECT_EQ(m.file.polygons, 2u);
+  EXPECT_EQ(m.file.polygons, polygons);
   EXPECT_EQ(m.vertices[0], Vec3d(0, 0, 0));
   EXPECT_EQ(m.vertices[1], Vec3d(1, 0, 0));
   EXPECT_EQ(m.vertices[2], Vec3d(1, 1, 0));
@@ -51,17 +51,6 @@ void expect_rejected(const std::string& name, const std::string& problem) {
 }
 
 std::string temp_path(const std::string& name) { return testing::TempDir() + "bvhbench_mesh_io_" + name; }
-
-/// Appends the low `size` bytes of v in the given byte order.
-void put_int(std::string& s, std::uint64_t v, int size, bool big) {
-  for (int i = 0; i < size; ++i) s += char((v >> (8 * (big ? size - 1 - i : i))) & 0xff);
-}
-
-void put_float(std::string& s, float f, bool big) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, 4);
-  put_int(s, u, 4, big);
-}
 
 /// The integer types of the PLY spec with their sizes.
 struct IntType {
@@ -83,8 +72,8 @@ std::string strip_ply(const std::vector<long long>& strip, const IntType& count,
   const float xyz[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.1f, 0.2f, 0.3f}};
   for (auto& v : xyz)
     for (float c : v) put_float(s, c, big);
-  put_int(s, strip.size(), count.size, big);
-  for (long long i : strip) put_int(s, std::uint64_t(i), index.size, big);
+  put_bytes(s, strip.size(), count.size, big);
+  for (long long i : strip) put_bytes(s, std::uint64_t(i), index.size, big);
   return s;
 }
 
@@ -146,6 +135,13 @@ TEST(MeshIo, FormatIsSniffedWhenTheExtensionIsUnknown) {
   EXPECT_EQ(load_mesh(obj).triangles.size(), 1u);
   std::remove(ply.c_str());
   std::remove(obj.c_str());
+  for (const char* stl : {"good_binary.stl", "good_ascii.stl"}) {
+    SCOPED_TRACE(stl);
+    const std::string path = temp_path(std::string(stl) + ".dat");
+    write_file_bytes(path, read_file_bytes(fixture(stl)));
+    expect_square_and_tri(load_mesh(path), true, 3);
+    std::remove(path.c_str());
+  }
 }
 
 TEST(MeshIo, ExtensionIsCaseInsensitive) {
@@ -158,7 +154,7 @@ TEST(MeshIo, ExtensionIsCaseInsensitive) {
 // Every count type and index type of the PLY spec, in both byte orders, through both the fast
 // and the generic binary paths (triangles, then a quad that leaves the fast path).
 TEST(MeshIo, BinaryPlyEveryIntegerTypeAndByteOrder) {
-  const auto put = put_int;
+  const auto put = [](std::string& s, std::uint64_t v, int size, bool big) { put_bytes(s, v, size, big); };
   for (bool big : {false, true})
     for (const IntType& ct : kIntTypes)
       for (const IntType& it : kIntTypes) {
@@ -300,8 +296,8 @@ TEST(MeshIo, LongStripCrossesBufferBoundaries) {
       put_float(s, float(r), false);
       put_float(s, 0.f, false);
     }
-  put_int(s, strip.size(), 4, false);
-  for (long long i : strip) put_int(s, std::uint64_t(i), 4, false);
+  put_bytes(s, strip.size(), 4, false);
+  for (long long i : strip) put_bytes(s, std::uint64_t(i), 4, false);
   ASSERT_GT(s.size(), std::size_t(12) << 20);
   const std::string path = temp_path("long_strip.ply");
   write_file_bytes(path, s);
@@ -318,6 +314,86 @@ TEST(MeshIo, LongStripCrossesBufferBoundaries) {
   // The last triangle is an odd one of its row: (v[k+1], v[k], v[k+2]).
   EXPECT_EQ(m.triangles.back(), (Tri{rows * cols - 1, (rows + 1) * cols - 2, (rows + 1) * cols - 1}));
   EXPECT_EQ(m.sha256, sha256_hex(s.data(), s.size()));
+}
+
+// ---- STL ----
+
+TEST(MeshIo, BinaryStlWithSolidHeaderIsBinary) {
+  const Mesh m = load_mesh(fixture("good_binary.stl"));
+  expect_square_and_tri(m, true, 3);
+  EXPECT_FALSE(std::signbit(m.vertices[0].x)) << "the first corner's +0 is kept; the later -0 welds to it";
+  EXPECT_EQ(m.file.format, "stl");
+  EXPECT_EQ(m.file.variant, "binary");
+  EXPECT_EQ(m.file.corners, 9u);
+}
+
+TEST(MeshIo, AsciiStlTwoSolidsMixedCaseSplitLines) {
+  const Mesh m = load_mesh(fixture("good_ascii.stl"));
+  expect_square_and_tri(m, true, 3);
+  EXPECT_EQ(m.file.variant, "ascii");
+  EXPECT_EQ(m.file.solids, 2u);
+  EXPECT_EQ(m.file.corners, 9u);
+}
+
+// Welding is by value, exactly: -0.0 and 0.0 are one vertex (the first corner's sign is kept),
+// a coordinate one float ulp away is another vertex.
+TEST(MeshIo, StlWeldsEqualValuesOnly) {
+  Mesh m;
+  const float up = std::nextafter(1.0f, 2.0f);
+  m.vertices = {{-0.0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.0, -0.0, 0}, {double(up), 0, 0}};
+  m.triangles = {{0, 1, 2}, {3, 4, 2}};
+  for (bool ascii : {false, true}) {
+    SCOPED_TRACE(ascii ? "ascii" : "binary");
+    const Mesh r = load_mesh_bytes(ascii ? stl_ascii_bytes(m) : stl_binary_bytes(m), "weld.stl");
+    ASSERT_EQ(r.vertices.size(), 4u);
+    EXPECT_TRUE(std::signbit(r.vertices[0].x));
+    EXPECT_EQ(r.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 3, 2}}));
+    EXPECT_EQ(r.vertices[3].x, double(up));
+  }
+}
+
+// ASCII STL numbers are rounded to float32 like binary STL stores them: both read the same mesh,
+// which is the mesh's float32 values welded (here a closed torus: every vertex shared).
+TEST(MeshIo, AsciiAndBinaryStlReadTheSameMesh) {
+  const Mesh m = torus(24, 12, 1.0, 0.35);
+  const Mesh want = stl_canonical(m);
+  const Mesh a = load_mesh_bytes(stl_ascii_bytes(m), "torus.stl"), b = load_mesh_bytes(stl_binary_bytes(m), "t.stl");
+  EXPECT_EQ(a.vertices, want.vertices);
+  EXPECT_EQ(a.triangles, want.triangles);
+  EXPECT_EQ(b.vertices, want.vertices);
+  EXPECT_EQ(b.triangles, want.triangles);
+  EXPECT_EQ(b.vertices.size(), m.vertices.size()) << "a closed torus's corners weld to its vertices";
+}
+
+TEST(MeshIo, AsciiStlPolygonLoopIsFanTriangulated) {
+  const Mesh m = load_mesh_bytes("solid q\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                 "vertex 1 1 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid q\n", "quad.stl");
+  EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 2, 3}}));
+  EXPECT_EQ(m.file.polygons, 1u);
+  EXPECT_EQ(m.file.polygons_triangulated, 1u);
+}
+
+// 200,000 facets (10 MB, more than the read buffer), read three times: the same triangles from
+// the weld table each pass, which the reader reports as resident.
+TEST(MeshIo, LargerBinaryStlThreePasses) {
+  const Mesh m = torus(500, 200);
+  const std::string bytes = stl_binary_bytes(m, "binary");
+  ASSERT_GT(bytes.size(), std::size_t(9) << 20);
+  const std::string path = temp_path("big.stl");
+  write_file_bytes(path, bytes);
+  auto reader = MeshReader::open(path);
+  std::vector<Vec3d> v;
+  reader->read_vertices([&](std::uint64_t, const Vec3d* p, std::size_t n) { v.insert(v.end(), p, p + n); });
+  EXPECT_EQ(v.size(), m.vertices.size());
+  EXPECT_GT(reader->resident_bytes(), 12 * v.size()) << "the weld table: coordinates and index";
+  const Mesh want = stl_canonical(m);
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<Tri> t;
+    reader->read_triangles([&](std::uint64_t, const Triangle* p, std::size_t n) { t.insert(t.end(), p, p + n); });
+    EXPECT_EQ(t, want.triangles) << "pass " << pass;
+  }
+  EXPECT_EQ(reader->sha256(), sha256_file(path));
+  std::remove(path.c_str());
 }
 
 TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
@@ -453,6 +529,26 @@ TEST(MeshIoRejects, TristripFloatIndices) {
                      "f.ply", "strip vertex indices have a floating-point type");
 }
 
+TEST(MeshIoRejects, StlTruncatedBinary) {
+  expect_rejected("bad_truncated.stl", "truncated: the binary STL header declares 3 facets (84 + 50 x 3 = 234 bytes) but the file has 214 bytes");
+}
+TEST(MeshIoRejects, StlBinaryExtraData) { expect_rejected("bad_extra_data.stl", "but the file has 244 bytes (counts do not match the data)"); }
+TEST(MeshIoRejects, StlBinaryHeaderSolidButWrongSize) {
+  expect_rejected("bad_binary_with_solid_header.stl",
+                  "binary data in an ASCII STL (if this is a binary STL: the binary STL header declares 3 facets");
+}
+TEST(MeshIoRejects, StlNanCoordinate) { expect_rejected("bad_nan.stl", "facet 1 vertex 2 has a NaN coordinate"); }
+TEST(MeshIoRejects, StlInfiniteCoordinate) { expect_rejected("bad_inf.stl", "facet 0 vertex 1 has an infinite coordinate"); }
+TEST(MeshIoRejects, StlTwoVertexFacet) { expect_rejected("bad_two_vertex_facet.stl", "facet 0 has 2 vertices (a face needs at least 3)"); }
+TEST(MeshIoRejects, StlGarbageNumber) { expect_rejected("bad_garbage_number.stl", "line 5: '1.0abc' is not a number"); }
+TEST(MeshIoRejects, StlTruncatedAscii) { expect_rejected("bad_truncated_ascii.stl", "truncated: the file ends in facet 0"); }
+TEST(MeshIoRejects, StlNoEndsolid) { expect_rejected("bad_no_endsolid.stl", "truncated: the file ends in solid 0 after 1 facet (no 'endsolid')"); }
+TEST(MeshIoRejects, StlUnknownKeyword) { expect_rejected("bad_keyword.stl", "line 8: unexpected 'endfacett' (expected 'endfacet')"); }
+TEST(MeshIoRejects, EmptyMeshStl) {
+  expect_rejected("bad_empty.stl", "no triangles (the file has no facets)");
+  expect_rejected("bad_empty_binary.stl", "no triangles (the file has no facets)");
+}
+
 TEST(MeshIoRejects, GarbageNumberPly) { expect_rejected("bad_garbage_number.ply", "'zero' is not a number"); }
 TEST(MeshIoRejects, GarbageNumberObj) { expect_rejected("bad_garbage_number.obj", "'1.0abc' is not a number"); }
 TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", "'two' is not a vertex reference"); }
@@ -460,7 +556,8 @@ TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", 
 // Prefixes of good files are rejected cleanly or read consistently (never a crash or a hang).
 TEST(MeshIoRejects, EveryTruncationOfABinaryFile) {
   for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj",
-                           "good_tristrips_be.ply", "good_tristrips_ascii.ply"}) {
+                           "good_tristrips_be.ply", "good_tristrips_ascii.ply", "good_binary.stl",
+                           "good_ascii.stl"}) {
     const std::string bytes = read_file_bytes(fixture(name));
     const std::string ext = std::string(name).substr(std::string(name).rfind('.'));
     const std::string path = temp_path("prefix" + ext);
