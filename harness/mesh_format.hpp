@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "byte_source.hpp"
@@ -111,6 +112,10 @@ std::unique_ptr<FormatParser> make_off_parser(ByteSource& src);
 /// 84 + 50 n bytes, n the uint32 at offset 80 (the only sure sign of a binary STL, since the
 /// 80-byte header of many binary STLs starts with "solid" too).
 bool stl_binary_size_matches(ByteSource& src);
+
+/// True if the first line of `head` with something before its comment starts with an OFF
+/// keyword ("OFF", "COFF", ..., also ModelNet's "OFF490 518 0").
+bool looks_like_off(std::string_view head);
 
 // ---- the words of the messages, shared by every format ----
 

@@ -16,7 +16,7 @@ namespace bvhbench {
 
 namespace {
 
-const char* const kKnownFormats = "expected a PLY, OBJ or STL file";
+const char* const kKnownFormats = "expected a PLY, OBJ, STL or OFF file";
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -32,13 +32,13 @@ std::string format_name(const std::string& format_or_path) {
   return lower(format_or_path.substr(dot + 1));
 }
 
-bool known(const std::string& f) { return f == "ply" || f == "obj" || f == "stl"; }
+bool known(const std::string& f) { return f == "ply" || f == "obj" || f == "stl" || f == "off"; }
 
 /// The format of an input whose name says nothing: PLY has a magic line; a binary STL has the
-/// size its header declares, an ASCII STL starts with "solid"; OBJ is text starting with a known
-/// statement or a comment.
+/// size its header declares, an ASCII STL starts with "solid"; OFF starts with its keyword
+/// (after comments); OBJ is text starting with a known statement or a comment.
 std::string sniff(ByteSource& src) {
-  src.fill(std::size_t(std::min<std::uint64_t>(src.size(), 256)));
+  src.fill(std::size_t(std::min<std::uint64_t>(src.size(), 4096)));
   std::string_view head(src.p, src.avail());
   if (head.substr(0, 4) == "ply\n" || head.substr(0, 4) == "ply\r") return "ply";
   if (stl_binary_size_matches(src)) return "stl";
@@ -46,6 +46,7 @@ std::string sniff(ByteSource& src) {
   std::string_view rest = head;
   const std::string_view kw = next_token(rest);
   if (kw == "solid") return "stl";
+  if (looks_like_off(head)) return "off";
   const bool text = head.find('\0') == std::string_view::npos;
   if (text && (kw == "v" || kw == "vt" || kw == "vn" || kw == "f" || kw == "o" || kw == "g" || kw == "mtllib" ||
                kw == "usemtl" || kw == "s" || (!kw.empty() && kw[0] == '#')))
@@ -63,6 +64,8 @@ MeshReader::MeshReader(std::unique_ptr<ByteSource> src, std::string format) : sr
     parser_ = make_ply_parser(*src_);
   else if (format == "stl")
     parser_ = make_stl_parser(*src_);
+  else if (format == "off")
+    parser_ = make_off_parser(*src_);
   else
     parser_ = make_obj_parser(*src_);
   parser_->read_header();

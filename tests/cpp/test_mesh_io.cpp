@@ -142,6 +142,13 @@ TEST(MeshIo, FormatIsSniffedWhenTheExtensionIsUnknown) {
     expect_square_and_tri(load_mesh(path), true, 3);
     std::remove(path.c_str());
   }
+  for (const char* off : {"good.off", "good_coff.off", "good_modelnet.off"}) {  // good.off starts with a comment
+    SCOPED_TRACE(off);
+    const std::string path = temp_path(std::string(off) + ".dat");
+    write_file_bytes(path, read_file_bytes(fixture(off)));
+    expect_square_and_tri(load_mesh(path), false);
+    std::remove(path.c_str());
+  }
 }
 
 TEST(MeshIo, ExtensionIsCaseInsensitive) {
@@ -396,6 +403,34 @@ TEST(MeshIo, LargerBinaryStlThreePasses) {
   std::remove(path.c_str());
 }
 
+// ---- OFF ----
+
+TEST(MeshIo, OffVariants) {
+  const struct { const char* file; const char* variant; } cases[] = {
+      {"good.off", "OFF"},           // comments and blank lines anywhere, counts on the next line
+      {"good_coff.off", "COFF"},     // counts on the keyword line, vertex and face colours
+      {"good_modelnet.off", "OFF"},  // "OFF5 2 0": ModelNet's counts glued to the keyword
+      {"good_stcnoff.off", "STCNOFF"},
+      {"good_noff.off", "nOFF"}};    // a dimension line (3)
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.file);
+    const Mesh m = load_mesh(fixture(c.file));
+    expect_square_and_tri(m, false);
+    EXPECT_EQ(m.file.format, "off");
+    EXPECT_EQ(m.file.variant, c.variant);
+    EXPECT_EQ(m.file.polygons_triangulated, 1u);
+  }
+}
+
+TEST(MeshIo, OffAndObjReadTheSameDoublesAsTheMesh) {
+  const Mesh m = torus(16, 8);
+  for (const std::string& bytes : {off_bytes(m), off_bytes(m, "COFF"), obj_bytes(m)}) {
+    const Mesh r = load_mesh_bytes(bytes, "torus", "");
+    EXPECT_EQ(r.vertices, m.vertices);
+    EXPECT_EQ(r.triangles, m.triangles);
+  }
+}
+
 TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
   Mesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.1, -2.5, 1e-3}};
@@ -549,6 +584,29 @@ TEST(MeshIoRejects, EmptyMeshStl) {
   expect_rejected("bad_empty_binary.stl", "no triangles (the file has no facets)");
 }
 
+TEST(MeshIoRejects, OffRefusedVariants) {
+  expect_rejected("bad_4off.off", "'4OFF' has homogeneous coordinates (x y z w), which are not read");
+  expect_rejected("bad_noff_dim4.off", "'nOFF' of dimension '4': only 3D vertices are read");
+  expect_rejected("bad_binary.off", "binary OFF ('OFF BINARY') is not read");
+  expect_rejected("bad_keyword.off", "not an OFF file: 'OFX' is not an OFF keyword");
+}
+TEST(MeshIoRejects, OffCounts) {
+  expect_rejected("bad_counts.off", "line 2: bad counts line '3 x 0'");
+  expect_rejected("bad_truncated.off", "truncated: the file ends in face 1 of 2 declared in the header (counts do not match the data)");
+  expect_rejected("bad_lying_header.off", "truncated: the header declares 4000000000 vertices and 4000000000 faces");
+  expect_rejected("bad_extra_data.off", "line 7: more data after the last face than the header declares (counts do not match the data)");
+}
+TEST(MeshIoRejects, OffValues) {
+  expect_rejected("bad_index_out_of_range.off", "line 6: face 0 has vertex index 7 out of range (the header declares 3 vertices)");
+  expect_rejected("bad_nan.off", "vertex 1 has a NaN coordinate");
+  expect_rejected("bad_inf.off", "vertex 2 has an infinite coordinate");
+  expect_rejected("bad_two_vertex_face.off", "line 6: face 0 has 2 vertices (a face needs at least 3)");
+  expect_rejected("bad_empty.off", "no triangles (the file has no faces)");
+  expect_rejected("bad_garbage_number.off", "line 4 (vertex 1): 'zero' is not a number");
+  expect_rejected("bad_too_few_values.off", "line 4 (vertex 1): too few values (x y z expected)");
+  expect_rejected("bad_too_many_values.off", "line 4 (vertex 1): more values than x y z and a normal, a colour and texture coordinates ('10' left over)");
+}
+
 TEST(MeshIoRejects, GarbageNumberPly) { expect_rejected("bad_garbage_number.ply", "'zero' is not a number"); }
 TEST(MeshIoRejects, GarbageNumberObj) { expect_rejected("bad_garbage_number.obj", "'1.0abc' is not a number"); }
 TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", "'two' is not a vertex reference"); }
@@ -557,7 +615,7 @@ TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", 
 TEST(MeshIoRejects, EveryTruncationOfABinaryFile) {
   for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj",
                            "good_tristrips_be.ply", "good_tristrips_ascii.ply", "good_binary.stl",
-                           "good_ascii.stl"}) {
+                           "good_ascii.stl", "good.off", "good_coff.off"}) {
     const std::string bytes = read_file_bytes(fixture(name));
     const std::string ext = std::string(name).substr(std::string(name).rfind('.'));
     const std::string path = temp_path("prefix" + ext);
