@@ -320,8 +320,8 @@ void add_build_command(CLI::App& ebp_cmd) {
         std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
                     double(peak) <= budget ? "" : " (EXCEEDED, see OUT_OF_CORE.md: what is bounded)");
         if (double(rep.min_budget_bytes) > budget)
-          std::printf("note: this model needs a budget of at least %.0f MiB (float vertices %.0f MiB, node skeleton "
-                      "and top tree, fixed reserve)\n",
+          std::printf("note: this model needs a budget of at least %.0f MiB (mesh source %.0f MiB: float vertices, "
+                      "read buffers, an STL's weld table; node skeleton and top tree, fixed reserve)\n",
                       double(rep.min_budget_bytes) / 1048576.0, double(src->resident_bytes()) / 1048576.0);
       }
       return;
