@@ -490,7 +490,10 @@ class PlyParser final : public FormatParser {
       const char* q = src_.p;
       const char* end = src_.e - 12;
       const std::uint64_t i0 = i;
-      while (i < el.count && q < end && static_cast<unsigned char>(*q) == 3) {
+      const std::size_t room = std::size_t(std::min<std::uint64_t>(el.count - i, out.room()));
+      Triangle* dst = out.tail(room);
+      std::size_t w = 0;
+      while (w < room && q < end && static_cast<unsigned char>(*q) == 3) {
         std::uint32_t v[3];
         std::memcpy(v, q + 1, 12);
         if (swap)
@@ -498,12 +501,13 @@ class PlyParser final : public FormatParser {
         for (int k = 0; k < 3; ++k)
           if (v[k] >= nv) {
             src_.p = q;
-            bad_index(el, i, is_signed ? (long long)std::int32_t(v[k]) : (long long)v[k]);
+            bad_index(el, i + w, is_signed ? (long long)std::int32_t(v[k]) : (long long)v[k]);
           }
-        out.add(v[0], v[1], v[2]);
+        dst[w++] = {v[0], v[1], v[2]};
         q += 13;
-        ++i;
       }
+      out.commit(w);
+      i += w;
       info.polygons += i - i0;
       src_.p = q;
       if (i == i0 && i < el.count) {
