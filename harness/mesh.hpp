@@ -1,7 +1,9 @@
 #pragma once
 /// The triangle mesh every method is built on, read by the one mesh reader (mesh_reader.hpp):
-/// PLY (ASCII, binary little and big endian; `face` lists and `tristrips`) and OBJ.
-/// Coordinates are kept in double as read; methods convert to what they use.
+/// PLY (ASCII, binary little and big endian; `face` lists and `tristrips`), OBJ, STL (binary and
+/// ASCII, corners welded exactly) and OFF; polygons fan-triangulated (docs/meshes.md says what
+/// each format accepts and refuses). Coordinates are kept in double as read; methods convert to
+/// what they use.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -37,12 +39,13 @@ struct Mesh {
 /// of range, a NaN or infinite coordinate, a face with fewer than 3 vertices, and an empty mesh
 /// (no triangle). Degenerate and duplicate triangles are valid and kept.
 /// `progress` (optional) is advanced over the file's bytes. The file is streamed, never mapped or
-/// read whole: the peak memory is the mesh plus one 8 MiB buffer.
+/// read whole: the peak memory is the mesh plus the reader's buffers (≈ 10 MiB; an STL's weld
+/// table besides while it is read).
 Mesh load_mesh(const std::string& path, Progress* progress = nullptr);
 
 /// The same from bytes in memory (the same code; for fuzzing and tests): `name` names the input
-/// in messages (and becomes Mesh::path), `format` is "ply", "obj", a file name or extension to
-/// take it from, or "" to sniff the content.
+/// in messages (and becomes Mesh::path), `format` is "ply", "obj", "stl", "off", a file name or
+/// extension to take it from, or "" to sniff the content (an unknown format is an InputError).
 Mesh load_mesh_bytes(std::string_view data, const std::string& name, const std::string& format = "");
 
 /// Reads every vertex and triangle of `reader` into a Mesh (path = the reader's name).

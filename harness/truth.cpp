@@ -29,7 +29,7 @@ void add_truth_command(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand("truth", "Compute exact oracle answers (inside, winding, distance, closest "
                                           "triangle with ties) for a query set");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--queries", o->queries, "Query set .npy (float64, N x 3)")->required();
   cmd->add_option("--out", o->out, "Oracle file .npz")->required();
   cmd->add_option("--threads", o->threads, "Threads (default: all cores)")->check(CLI::Range(0, 1024));

@@ -224,7 +224,7 @@ void add_build_command(CLI::App& ebp_cmd) {
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = ebp_cmd.add_subcommand("build", "Build the EBP-Octree of a mesh into an on-disk store (.ebp)");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--out", o->out, "Output store (.ebp); appears only when complete")->required();
   cmd->add_option("--memory-budget", o->budget_mb, "Memory budget in MiB (see OUT_OF_CORE.md: what it bounds)")
       ->required()
