@@ -431,6 +431,58 @@ TEST(MeshIo, OffAndObjReadTheSameDoublesAsTheMesh) {
   }
 }
 
+// ---- the reader: bytes in memory, several passes ----
+
+const char* const kGoodFixtures[] = {"good_ascii.ply",        "good_binary_le_double.ply", "good_binary_be.ply",
+                                     "good_binary_be_uchar.ply", "good_tristrips_be.ply", "good_tristrips_ascii.ply",
+                                     "good.obj",              "good_crlf.obj",             "good_crlf.ply",
+                                     "good_binary.stl",       "good_ascii.stl",            "good.off",
+                                     "good_coff.off",         "good_modelnet.off",         "good_stcnoff.off",
+                                     "good_noff.off"};
+
+// load_mesh_bytes is the file reader's code: the same mesh, hash and file info for every fixture,
+// with the format given or sniffed.
+TEST(MeshIo, BytesInMemoryReadAsTheFile) {
+  for (const char* name : kGoodFixtures) {
+    SCOPED_TRACE(name);
+    const Mesh a = load_mesh(fixture(name));
+    const std::string bytes = read_file_bytes(fixture(name));
+    for (const std::string& format : {std::string(name), std::string()}) {
+      const Mesh b = load_mesh_bytes(bytes, "mem", format);
+      EXPECT_EQ(b.path, "mem");
+      EXPECT_EQ(b.vertices, a.vertices);
+      EXPECT_EQ(b.triangles, a.triangles);
+      EXPECT_EQ(b.sha256, a.sha256);
+      EXPECT_EQ(b.file.format, a.file.format);
+      EXPECT_EQ(b.file.variant, a.file.variant);
+      EXPECT_EQ(b.file.polygons, a.file.polygons);
+      EXPECT_EQ(b.file.strip_joins_dropped, a.file.strip_joins_dropped);
+    }
+  }
+  expect_input_error([] { load_mesh_bytes("ply\n", "mem", "xyz"); }, "mem", "unknown mesh format 'xyz'");
+}
+
+// Every pass of read_triangles delivers the same triangles in the same chunks.
+TEST(MeshIo, TrianglePassesRepeat) {
+  for (const char* name : kGoodFixtures) {
+    SCOPED_TRACE(name);
+    auto reader = MeshReader::open(fixture(name));
+    reader->read_vertices([](std::uint64_t, const Vec3d*, std::size_t) {});
+    std::vector<Tri> first;
+    for (int pass = 0; pass < 3; ++pass) {
+      std::vector<Tri> t;
+      reader->read_triangles([&](std::uint64_t at, const Triangle* p, std::size_t n) {
+        EXPECT_EQ(at, t.size());
+        t.insert(t.end(), p, p + n);
+      });
+      if (pass == 0) first = t;
+      EXPECT_EQ(t, first) << "pass " << pass;
+    }
+    EXPECT_EQ(reader->num_triangles(), first.size());
+    EXPECT_EQ(reader->sha256(), sha256_file(fixture(name)));
+  }
+}
+
 TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
   Mesh m;
   m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.1, -2.5, 1e-3}};
