@@ -663,6 +663,30 @@ TEST(MeshIoRejects, GarbageNumberPly) { expect_rejected("bad_garbage_number.ply"
 TEST(MeshIoRejects, GarbageNumberObj) { expect_rejected("bad_garbage_number.obj", "'1.0abc' is not a number"); }
 TEST(MeshIoRejects, GarbageIndexObj) { expect_rejected("bad_garbage_index.obj", "'two' is not a vertex reference"); }
 
+// The same words for the same kind of problem, in every format that can have it.
+TEST(MeshIoRejects, EveryKindOfProblemInTheSameWordsInEveryFormat) {
+  const struct { const char* problem; std::vector<const char*> files; } kinds[] = {
+      {"file not found", {"no_such_file.ply", "no_such_file.obj", "no_such_file.stl", "no_such_file.off"}},
+      {"unknown mesh format", {"bad_unknown.xyz"}},
+      {"truncated", {"bad_truncated.ply", "bad_tristrips_truncated.ply", "bad_truncated.stl", "bad_truncated_ascii.stl",
+                     "bad_truncated.off"}},
+      {"counts do not match the data", {"bad_count_mismatch.ply", "bad_extra_data.ply", "bad_extra_data.stl",
+                                        "bad_extra_data.off", "bad_truncated.off"}},
+      {"bytes follow the header", {"bad_lying_header.ply", "bad_lying_header.off"}},
+      {"out of range", {"bad_index_out_of_range.ply", "bad_index_binary.ply", "bad_tristrips_index.ply",
+                        "bad_index_out_of_range.obj", "bad_index_out_of_range.off"}},
+      {"has a NaN coordinate", {"bad_nan.ply", "bad_nan.obj", "bad_nan.stl", "bad_nan.off"}},
+      {"has an infinite coordinate", {"bad_inf.ply", "bad_inf.obj", "bad_inf.stl", "bad_inf.off"}},
+      {"has 2 vertices (a face needs at least 3)", {"bad_two_vertex_face.ply", "bad_two_vertex_face.obj",
+                                                     "bad_two_vertex_facet.stl", "bad_two_vertex_face.off"}},
+      {"no triangles", {"bad_empty.ply", "bad_tristrips_only_joins.ply", "bad_empty.obj", "bad_empty_file.obj",
+                        "bad_empty.stl", "bad_empty_binary.stl", "bad_empty.off"}},
+      {"is not a number", {"bad_garbage_number.ply", "bad_garbage_number.obj", "bad_garbage_number.stl",
+                           "bad_garbage_number.off"}}};
+  for (const auto& k : kinds)
+    for (const char* file : k.files) expect_rejected(file, k.problem);
+}
+
 // Prefixes of good files are rejected cleanly or read consistently (never a crash or a hang).
 TEST(MeshIoRejects, EveryTruncationOfABinaryFile) {
   for (const char* name : {"good_binary_le_double.ply", "good_binary_be.ply", "good_ascii.ply", "good.obj",
