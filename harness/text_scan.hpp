@@ -1,11 +1,12 @@
 #pragma once
 /// Tokens and numbers of the text mesh formats (ASCII PLY, OBJ, ASCII STL, OFF), parsed with
 /// from_chars: exact, locale-independent, and strict (a token is a number only if all of it is).
+/// parse_double is text_number.hpp's, shared with the text files of points.
 #include <charconv>
-#include <cstdlib>
-#include <string>
 #include <string_view>
 #include <system_error>
+
+#include "text_number.hpp"
 
 namespace bvhbench {
 
@@ -31,24 +32,6 @@ inline std::string_view strip(std::string_view s) {
 
 /// `s` up to its first '#' (a comment to the end of the line in OBJ and OFF).
 inline std::string_view before_comment(std::string_view s) { return s.substr(0, s.find('#')); }
-
-/// Parses all of `tok` as a double; false for anything else (empty, trailing junk).
-inline bool parse_double(std::string_view tok, double& out) {
-  const char* b = tok.data();
-  const char* end = b + tok.size();
-  if (b != end && *b == '+') ++b;
-  if (b == end || *b == '+') return false;
-  auto r = std::from_chars(b, end, out, std::chars_format::general);
-  if (r.ptr != end) return false;
-  if (r.ec == std::errc::result_out_of_range) {
-    // Overflow reads as +-inf (then rejected as an infinite coordinate), underflow as 0 or a
-    // subnormal, as strtod does; from_chars reports both as errors.
-    const std::string copy(tok);
-    out = std::strtod(copy.c_str(), nullptr);
-    return true;
-  }
-  return r.ec == std::errc();
-}
 
 /// Parses all of `tok` as a (signed) integer.
 inline bool parse_int(std::string_view tok, long long& out) {
