@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "mesh_format.hpp"
@@ -74,40 +75,31 @@ inline T load(const char* q, bool swap) {
   return v;
 }
 
-double load_double(PlyType t, const char* q, bool swap) {
+/// The value of type `t` at q as R: double (any type) or long long (integer types; uint64 values
+/// beyond int64 are clamped: they are out of range anyway).
+template <class R>
+R load_as(PlyType t, const char* q, bool swap) {
   switch (t) {
-    case PlyType::i8: return load<std::int8_t>(q, swap);
-    case PlyType::u8: return load<std::uint8_t>(q, swap);
-    case PlyType::i16: return load<std::int16_t>(q, swap);
-    case PlyType::u16: return load<std::uint16_t>(q, swap);
-    case PlyType::i32: return load<std::int32_t>(q, swap);
-    case PlyType::u32: return load<std::uint32_t>(q, swap);
-    case PlyType::i64: return double(load<std::int64_t>(q, swap));
-    case PlyType::u64: return double(load<std::uint64_t>(q, swap));
-    case PlyType::f32: return load<float>(q, swap);
-    case PlyType::f64: return load<double>(q, swap);
+    case PlyType::i8: return R(load<std::int8_t>(q, swap));
+    case PlyType::u8: return R(load<std::uint8_t>(q, swap));
+    case PlyType::i16: return R(load<std::int16_t>(q, swap));
+    case PlyType::u16: return R(load<std::uint16_t>(q, swap));
+    case PlyType::i32: return R(load<std::int32_t>(q, swap));
+    case PlyType::u32: return R(load<std::uint32_t>(q, swap));
+    case PlyType::i64: return R(load<std::int64_t>(q, swap));
+    case PlyType::u64: {
+      const std::uint64_t v = load<std::uint64_t>(q, swap);
+      if (std::is_floating_point<R>::value) return R(v);
+      return v > std::uint64_t(std::numeric_limits<long long>::max()) ? R(std::numeric_limits<long long>::max()) : R(v);
+    }
+    case PlyType::f32: return std::is_floating_point<R>::value ? R(load<float>(q, swap)) : R(0);
+    case PlyType::f64: return std::is_floating_point<R>::value ? R(load<double>(q, swap)) : R(0);
   }
-  return 0;
+  return R(0);  // not reached; list counts and indices are checked to be integers
 }
 
-/// Integer value; uint64 values beyond int64 are clamped (they are out of range anyway).
-long long load_int(PlyType t, const char* q, bool swap) {
-  switch (t) {
-    case PlyType::i8: return load<std::int8_t>(q, swap);
-    case PlyType::u8: return load<std::uint8_t>(q, swap);
-    case PlyType::i16: return load<std::int16_t>(q, swap);
-    case PlyType::u16: return load<std::uint16_t>(q, swap);
-    case PlyType::i32: return load<std::int32_t>(q, swap);
-    case PlyType::u32: return load<std::uint32_t>(q, swap);
-    case PlyType::i64: return load<std::int64_t>(q, swap);
-    case PlyType::u64: {
-      std::uint64_t v = load<std::uint64_t>(q, swap);
-      return v > std::uint64_t(std::numeric_limits<long long>::max()) ? std::numeric_limits<long long>::max()
-                                                                       : (long long)v;
-    }
-    default: return 0;  // not reached: list counts and indices are checked to be integers
-  }
-}
+double load_double(PlyType t, const char* q, bool swap) { return load_as<double>(t, q, swap); }
+long long load_int(PlyType t, const char* q, bool swap) { return load_as<long long>(t, q, swap); }
 
 /// A strip restart in binary: -1, i.e. every bit set, in any integer type (so an unsigned index
 /// type restarts at its largest value: the same bits).
