@@ -21,7 +21,7 @@ APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev
 
-.PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper rebaseline report clean distclean
+.PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper rebaseline fixture report clean distclean
 
 help:
 	@echo "make bench      - install, build, make default data, run the default suite, write results/default/report/"
@@ -32,6 +32,7 @@ help:
 	@echo "make large      - every method on a closed 4M-triangle model (about 15 minutes)"
 	@echo "make paper      - the paper's tables at 30M+ triangles (about an hour)"
 	@echo "make rebaseline - regenerate the committed CI baseline (results/baseline/) on purpose"
+	@echo "make fixture    - regenerate the report tests' result fixture (tests/fixtures/results_small/) on purpose"
 
 deps:
 	@missing=$$(for p in $(APT_PACKAGES); do \
@@ -104,6 +105,11 @@ paper: build
 rebaseline: build
 	@if [ -x tools/ci_gate.sh ]; then BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
 	 else echo "rebaseline: tools/ci_gate.sh not present yet"; exit 1; fi
+
+# The report tests' fixture is a real suite run; a change of parameters, job ids or result keys
+# makes tests/python/test_report_fixture.py ask for this.
+fixture: build
+	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(VPY) tests/fixtures/results_small/make_fixture.py
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -18,5 +18,6 @@ void add_run_command(CLI::App& app);      // run_job.cpp
 void add_suite_command(CLI::App& app);    // suite.cpp
 void add_truth_command(CLI::App& app);    // truth.cpp
 void add_compare_command(CLI::App& app);  // compare.cpp
+void add_mesh_info_command(CLI::App& app);  // mesh_info.cpp
 
 }  // namespace bvhbench

@@ -40,6 +40,14 @@ inline int orient2(const Vec3d& u, const Vec3d& v, const Vec3d& w, int i, int j)
   return int(CGAL::orientation(K::Point_2(u[i], u[j]), K::Point_2(v[i], v[j]), K::Point_2(w[i], w[j])));
 }
 
+}  // namespace
+
+bool collinear_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return CGAL::collinear(K::Point_3(a.x, a.y, a.z), K::Point_3(b.x, b.y, b.z), K::Point_3(c.x, c.y, c.z));
+}
+
+namespace {
+
 /// Sign of det(u - p', v - p') in the (y, z) plane, p' = p + (., eps, eps^2): never 0 unless u and
 /// v project to the same point. Expansion: det0 + eps (u_z - v_z) + eps^2 (v_y - u_y).
 inline int sos_orient_yz(const Vec3d& u, const Vec3d& v, const Vec3d& p) {

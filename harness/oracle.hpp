@@ -107,6 +107,10 @@ class Oracle {
   std::vector<std::array<Vec3d, 2>> boundary_;  ///< boundary edges u->v, with multiplicity
 };
 
+/// True if a, b and c lie on one line (two or three of them coinciding included), decided
+/// exactly with the oracle's predicates: a triangle of zero area.
+bool collinear_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c);
+
 /// Writes the oracle file (docs/results.md, "Oracle") atomically.
 void write_oracle_npz(const std::string& path, const OracleAnswers& a, const std::string& mesh_sha256,
                       const std::string& queries_sha256);

@@ -329,7 +329,7 @@ void add_run_command(CLI::App& app) {
   auto budget_mb = std::make_shared<double>(0);
   auto quiet = std::make_shared<bool>(false);
   auto* cmd = app.add_subcommand("run", "Run one job: build one method on one mesh, replay one query set");
-  cmd->add_option("--mesh", spec->mesh_path, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", spec->mesh_path, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--method", spec->method_spec, "NAME or NAME:key=value,...")->required();
   cmd->add_option("--queries", spec->queries_path,
                   "Query set: .npy from bvhbench queries (with its .json sidecar), or points made "

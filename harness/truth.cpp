@@ -28,7 +28,7 @@ void add_truth_command(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand("truth", "Compute exact oracle answers (inside, winding, distance, closest "
                                           "triangle with ties) for a query set");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--queries", o->queries,
                   "Query set: .npy (float64/float32, N x 3) or .xyz/.csv text, one point a line; a "
                   ".json sidecar beside it is optional")

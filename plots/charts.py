@@ -17,12 +17,12 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 import fmt
+import stability
 import tables
 from metrics import METRICS, axis_label, pareto_front
-from results_io import is_coherent, shown_configs
+from results_io import is_coherent, median, method_sort_key, shown_configs
 from style import (DPI, FIGSIZE_PANEL, HAPTIC_DEADLINE_NS, HAPTIC_RATE_HZ, STATUS_COLORS,
-                   STATUS_LABELS, STATUS_SEVERITY, method_color, method_marker,
-                   method_sort_key)
+                   STATUS_LABELS, method_color, method_marker)
 
 
 class NoData(Exception):
@@ -82,11 +82,6 @@ def _log_ticks(ax, axis="y", formatter=None):
     a.set_minor_formatter(NullFormatter())
     if formatter is not None:
         a.set_major_formatter(formatter)
-
-
-def _method_handle(method, label=None, line=True):
-    return Line2D([], [], color=method_color(method), marker=method_marker(method),
-                  linestyle="-" if line else "none", label=label or method, markersize=6)
 
 
 def _time_formatter(ax, axis="x"):
@@ -189,7 +184,7 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
             ax.set_xticklabels([xm.zero_label or "0"] + [f"$10^{{{round(math.log10(t))}}}$"
                                                          for t in ticks])
             ax.set_xlim(lo, max(hi, floor * 100))
-    handles = [_method_handle(m) for m in methods]
+    handles = [_cfg_handle((m, "")) for m in methods]
     handles.append(Line2D([], [], color="#555555", marker="o", linestyle="none", alpha=0.45,
                           label="one configuration"))
     handles.append(Line2D([], [], color="#555555", marker="o", linestyle="-",
@@ -251,7 +246,7 @@ def _series(jobs, cfg, getter):
             if v is not None and v > 0:
                 by_t.setdefault(j.triangles, []).append(v)
     xs = sorted(by_t)
-    return xs, [float(np.median(by_t[x])) for x in xs]
+    return xs, [median(by_t[x]) for x in xs]
 
 
 def _size_axis(ax):
@@ -444,8 +439,8 @@ def latency_haptic(rs):
 def stability_matrix(rs):
     if not rs.is_stability_suite():
         raise NoData("the suite has no stress meshes")
-    data = tables.stability_cells(rs)
-    queries = sorted(data, key=lambda q: (q != "inside", q))
+    data = stability.matrix(rs)
+    queries = list(data)   # inside first (stability.matrix orders them)
     n_cfg = max(len(data[q][0]) for q in queries)
     n_mesh = max(len(data[q][1]) for q in queries)
     # One panel per query kind, stacked: stability suites have many stress cases (columns).
@@ -453,19 +448,20 @@ def stability_matrix(rs):
                              figsize=(max(4.0, 0.85 * n_mesh + 2.8) + 2.2,
                                       (0.42 * n_cfg + 2.4) * len(queries)))
     axes = axes.T
-    cmap = ListedColormap([STATUS_COLORS[s] for s in STATUS_SEVERITY])
+    severity = stability.SEVERITY
+    cmap = ListedColormap([STATUS_COLORS[s] for s in severity])
     used = set()
     for ax, query in zip(axes[0], queries):
         configs, meshes, cells = data[query]
-        grid = np.array([[STATUS_SEVERITY.index(cells[(c, m)]["status"]) for m in meshes]
+        grid = np.array([[severity.index(cells[(c, m)]["status"]) for m in meshes]
                          for c in configs])
         used |= {cells[k]["status"] for k in cells}
-        ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(STATUS_SEVERITY) - 0.5, aspect="auto")
+        ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(severity) - 0.5, aspect="auto")
         for i, c in enumerate(configs):
             for k, m in enumerate(meshes):
                 cell = cells[(c, m)]
                 dark = cell["status"] in ("crash", "oom", "timeout")
-                ax.text(k, i, tables.cell_text(query, cell), ha="center", va="center",
+                ax.text(k, i, stability.short_text(query, cell), ha="center", va="center",
                         fontsize=7, color="white" if dark else "black",
                         fontweight="bold" if cell["status"] == "ok_wrong" else "normal")
         ax.set_xticks(range(len(meshes)))
@@ -476,12 +472,12 @@ def stability_matrix(rs):
         ax.set_yticks(np.arange(-0.5, len(configs)), minor=True)
         ax.grid(which="minor", color="white", linewidth=2)
         ax.tick_params(which="minor", length=0)
-        what = ("cell text: wrong-answer rate" if query == "inside"
+        what = ("cell text: wrong-answer rate away from the surface" if query == "inside"
                 else "cell text: worst distance error / diagonal")
         ax.set_title(f"{query} · {what}", fontsize=9)
         ax.set_xlabel("stress case", fontsize=8)
     handles = [Patch(facecolor=STATUS_COLORS[s], edgecolor="#999999", label=STATUS_LABELS[s])
-               for s in STATUS_SEVERITY if s in used]
+               for s in severity if s in used]
     fig.tight_layout()
     fig.subplots_adjust(right=1 - 2.0 / fig.get_figwidth())
     fig.legend(handles=handles, loc="center left", fontsize=8, frameon=False,
@@ -529,8 +525,9 @@ CHARTS = {
         "legend gives the share of queries that missed it."),
     "stability_matrix": Chart(
         stability_matrix, "Stability matrix",
-        "Each method configuration (rows) on each stress case (columns). Colour: the worst "
-        "status of its jobs; 'ok, wrong answers' marks answers beyond the accuracy tolerance. "
-        "Text: the wrong-answer rate (inside) or the worst relative distance error (distance) "
-        "of ok cells; 'n/a' = unsupported, 'ok?' = no oracle."),
+        "Each method configuration (rows) on each stress case (columns), over every query kind "
+        "run there. Colour: the worst status of its jobs; 'ok, wrong answers' marks answers "
+        "beyond the accuracy tolerance. Text: the wrong-answer rate away from the surface "
+        "(inside) or the worst relative distance error (distance) of ok cells; 'n/a' = "
+        "unsupported, 'ok?' = no oracle. What a cell aggregates: plots/stability.py."),
 }

@@ -15,10 +15,19 @@ from collections import OrderedDict
 OK = "ok"
 KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oom", "error")
 
+# Method order in legends and tables: the star first, then peers, then anything new (sorted).
+METHOD_ORDER = ["ebp_octree", "cgal_aabb", "embree", "openvdb", "brute_force"]
+
 # Names that mark a mesh as a stress case (degenerate, broken, adversarial input).
 STRESS_NAME_RE = re.compile(
     r"stress|stability|degenerate|(^|_)open(_|$)|nonmanifold|non_manifold|self_?intersect|"
     r"sliver|needle", re.IGNORECASE)
+
+
+def method_sort_key(method):
+    if method in METHOD_ORDER:
+        return (METHOD_ORDER.index(method), method)
+    return (len(METHOD_ORDER), method)
 
 
 class ReportError(Exception):
@@ -50,6 +59,16 @@ def as_float(x):
     except (TypeError, ValueError):
         return None
     return v if v == v else None  # NaN -> None
+
+
+def median(values):
+    """The median of the values that are not None, as the harness computes its own (the mean
+    of the middle two for an even count); None when there are none."""
+    v = sorted(x for x in values if x is not None)
+    if not v:
+        return None
+    mid = len(v) // 2
+    return v[mid] if len(v) % 2 else (v[mid - 1] + v[mid]) / 2
 
 
 class Job:
@@ -295,6 +314,15 @@ def load(root):
     return ResultSet(root, jobs, unreadable, summary_only)
 
 
+def write_atomic(path, text):
+    """Write a text file as the harness does: to path.tmp, then renamed, so that a reader never
+    sees half a file."""
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
 def _summary_ids(path):
     if not os.path.isfile(path):
         return []
@@ -323,8 +351,7 @@ def representative_configs(jobs):
 
         def score(item):
             key, js = item
-            qps = [j.qps for j in js if j.ok and j.qps]
-            med = sorted(qps)[len(qps) // 2] if qps else 0.0
+            med = median(j.qps for j in js if j.ok) or 0.0
             return (len({j.mesh for j in js if j.ok}), med, key)
 
         chosen[method] = max(configs.items(), key=score)[0]
@@ -343,7 +370,6 @@ def shown_configs(jobs):
     """[(method, params_key)] that stand for each method in scaling charts and tables: the
     representative configuration, plus its path-coherent variant (coherent=true) when the
     suite ran one, since a coherent method is its own row (docs: ARCHITECTURE, Queries)."""
-    from style import method_sort_key  # local: keeps this module free of plotting imports
     reps = representative_configs(jobs)
     keys = {}
     for j in jobs:

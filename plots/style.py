@@ -26,8 +26,6 @@ METHOD_MARKERS = {
     "openvdb": "D",
     "brute_force": "v",
 }
-# Method order in legends and tables: the star first, then peers, then anything new (sorted).
-METHOD_ORDER = ["ebp_octree", "cgal_aabb", "embree", "openvdb", "brute_force"]
 
 _FALLBACK_COLORS = ["#ff7f0e", "#8c564b", "#e377c2", "#bcbd22", "#17becf",
                     "#aec7e8", "#ffbb78", "#98df8a", "#c5b0d5", "#c49c94"]
@@ -51,13 +49,8 @@ def method_marker(method):
     return _FALLBACK_MARKERS[_stable_index(method, len(_FALLBACK_MARKERS))]
 
 
-def method_sort_key(method):
-    if method in METHOD_ORDER:
-        return (METHOD_ORDER.index(method), method)
-    return (len(METHOD_ORDER), method)
-
-
-# Status colours of the stability matrix. "ok_wrong" is an ok job whose answers were wrong.
+# Status colours of the stability matrix (statuses and their order: stability.SEVERITY).
+# "ok_wrong" is an ok job whose answers were wrong.
 STATUS_COLORS = {
     "ok": "#4daf4a",
     "ok_wrong": "#ffd92f",
@@ -82,9 +75,6 @@ STATUS_LABELS = {
     "crash": "crash",
     "missing": "not run",
 }
-# Worse statuses win when several jobs fall in one cell.
-STATUS_SEVERITY = ["missing", "unsupported", "ok", "unchecked", "rejected_input", "ok_wrong",
-                   "error", "timeout", "oom", "crash"]
 
 HAPTIC_RATE_HZ = 1000.0          # a haptic loop needs 1 kHz
 HAPTIC_DEADLINE_NS = 1_000_000   # i.e. 1 ms per query

@@ -1,14 +1,14 @@
-"""Tables of the report: run context, the paper's tables, non-ok jobs, accuracy warnings and
-the stability matrix. Each table is built once as (header, rows) and rendered to Markdown,
-LaTeX or CSV by the `render_*` functions, so the formats never disagree.
+"""Tables of the report: run context, the paper's tables, non-ok jobs and accuracy warnings
+(the stability matrix is plots/stability.py). Each table is built once as (header, rows) and
+rendered to Markdown, LaTeX or CSV by the `render_*` functions, so the formats never disagree.
 """
 import csv
 import io
 
 import fmt
 from metrics import METRICS
-from results_io import is_coherent, representative_configs, shown_configs
-from style import STATUS_SEVERITY, method_sort_key
+from results_io import (is_coherent, median, method_sort_key, representative_configs,
+                        shown_configs)
 
 # Accuracy tolerances of the "Accuracy warnings" section.
 DIST_REL_ERR_TOL = 1e-5      # distance error above 1e-5 of the mesh diagonal is a wrong answer
@@ -134,8 +134,7 @@ def context_table(rs):
 # ---------------------------------------------------------------------------------------------
 def _pick(jobs, query, kind):
     """Median throughput of the ok jobs matching (query, kind); None if none."""
-    v = sorted(j.qps for j in jobs if j.ok and j.qps and j.query == query and j.kind == kind)
-    return v[len(v) // 2] if v else None
+    return median(j.qps for j in jobs if j.ok and j.query == query and j.kind == kind)
 
 
 def _inaccurate(jobs, query, kind):
@@ -143,11 +142,6 @@ def _inaccurate(jobs, query, kind):
 
 
 WRONG_MARK = "(!)"   # beside a rate whose answers were wrong; explained under the table
-
-
-def _median(vals):
-    v = sorted(x for x in vals if x is not None)
-    return v[len(v) // 2] if v else None
 
 
 def _status_note(jobs, query, kind):
@@ -180,9 +174,9 @@ def paper_rows(rs):
             row = {
                 "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
                 "config": js[0].config, "coherent": is_coherent(key), "levels": levels,
-                "build_s": _median(j.build_seconds for j in ok),
-                "structure_bytes": _median(j.structure_bytes for j in ok),
-                "file_bytes": _median(j.file_bytes for j in ok),
+                "build_s": median(j.build_seconds for j in ok),
+                "structure_bytes": median(j.structure_bytes for j in ok),
+                "file_bytes": median(j.file_bytes for j in ok),
                 "pis_random": _pick(js, "inside", "random"),
                 "pis_haptic": _pick(js, "inside", "haptic"),
                 "dist_haptic": _pick(js, "distance", "haptic"),
@@ -302,6 +296,10 @@ def accuracy_problems(job):
     sign = job.num("accuracy.distance.sign_wrong")
     if sign:
         out.append(f"{int(sign)} distances with the wrong sign")
+    # Kept out of the error statistics by the harness, so they must be named here.
+    non_finite = job.num("accuracy.distance.non_finite")
+    if non_finite:
+        out.append(f"{int(non_finite)} non-finite distances (NaN or infinite)")
     return out
 
 
@@ -315,92 +313,3 @@ def accuracy_warnings(rs):
             rows.append([j.config, j.mesh, j.query, j.kind, "; ".join(probs), j.id])
     unchecked = [j for j in rs.ok_jobs if not j.has_accuracy]
     return header, rows, unchecked
-
-
-# ---------------------------------------------------------------------------------------------
-# Stability matrix
-# ---------------------------------------------------------------------------------------------
-def _cell_status(job):
-    if not job.ok:
-        return job.status if job.status in STATUS_SEVERITY else "error"
-    if not job.has_accuracy:
-        return "unchecked"
-    return "ok_wrong" if accuracy_problems(job) else "ok"
-
-
-def _worst(statuses):
-    return max(statuses, key=STATUS_SEVERITY.index) if statuses else "missing"
-
-
-def stability_cells(rs):
-    """{query: (configs, meshes, {(config, mesh): cell})} over the stress meshes.
-
-    A cell merges every job of that method configuration on that mesh and query (all paths):
-    status is the worst one; 'inside_rate' the worst wrong-answer rate, 'dist_err' the worst
-    max relative distance error among ok jobs.
-    """
-    stress = [j for j in rs.jobs if j.mesh in rs.stress_meshes]
-    out = {}
-    for query in sorted({j.query for j in stress}, key=lambda q: (q != "inside", q)):
-        js = [j for j in stress if j.query == query]
-        configs = sorted({j.config for j in js},
-                         key=lambda c: (method_sort_key(c.split(":")[0]), c))
-        meshes = sorted({j.mesh for j in js})
-        cells = {}
-        for c in configs:
-            for m in meshes:
-                cj = [j for j in js if j.config == c and j.mesh == m]
-                rates = [METRICS["inside_wrong_rate"].getter(j) for j in cj if j.ok]
-                errs = [METRICS["dist_rel_err_max"].getter(j) for j in cj if j.ok]
-                rates = [r for r in rates if r is not None]
-                errs = [e for e in errs if e is not None]
-                cells[(c, m)] = {
-                    "status": _worst([_cell_status(j) for j in cj]),
-                    "inside_rate": max(rates) if rates else None,
-                    "dist_err": max(errs) if errs else None,
-                    "messages": sorted({j.message for j in cj if not j.ok and j.message}),
-                    "jobs": len(cj),
-                }
-        out[query] = (configs, meshes, cells)
-    return out
-
-
-def cell_text(query, cell):
-    """Short annotation of a stability cell: the error for ok cells, the status otherwise."""
-    st = cell["status"]
-    if st in ("ok", "ok_wrong"):
-        v = cell["inside_rate"] if query == "inside" else cell["dist_err"]
-        return fmt.sci(v, 1) if v is not None else "ok"
-    short = {"unsupported": "n/a", "rejected_input": "rejected", "unchecked": "ok?",
-             "missing": "", "timeout": "timeout", "crash": "CRASH", "oom": "OOM",
-             "error": "error"}
-    return short.get(st, st)
-
-
-def stability_table(rs):
-    """Flat table: one row per (query, config, stress mesh)."""
-    header = ["query", "method", "mesh", "status", "inside_wrong_rate", "dist_rel_err_max",
-              "message"]
-    rows = []
-    for query, (configs, meshes, cells) in stability_cells(rs).items():
-        for c in configs:
-            for m in meshes:
-                cell = cells[(c, m)]
-                if cell["jobs"] == 0:
-                    continue
-                rows.append([query, c, m, cell["status"], fmt.sci(cell["inside_rate"]),
-                             fmt.sci(cell["dist_err"]), "; ".join(cell["messages"])])
-    return header, rows
-
-
-def stability_matrix_md(rs):
-    """The matrix itself as Markdown: one table per query, configs × stress meshes."""
-    parts = []
-    for query, (configs, meshes, cells) in stability_cells(rs).items():
-        header = [f"{query} \\ mesh"] + meshes
-        rows = [[c] + [f"{cells[(c, m)]['status']}: {cell_text(query, cells[(c, m)])}"
-                       if cells[(c, m)]["status"] in ("ok", "ok_wrong")
-                       else cell_text(query, cells[(c, m)]) for m in meshes]
-                for c in configs]
-        parts.append(render_md(header, rows))
-    return "\n".join(parts)

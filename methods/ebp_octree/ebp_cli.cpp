@@ -226,7 +226,7 @@ void add_build_command(CLI::App& ebp_cmd) {
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = ebp_cmd.add_subcommand("build", "Build the EBP-Octree of a mesh into an on-disk store (.ebp)");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--out", o->out, "Output store (.ebp); appears only when complete")->required();
   cmd->add_option("--memory-budget", o->budget_mb, "Memory budget in MiB (see OUT_OF_CORE.md: what it bounds)")
       ->required()
@@ -322,8 +322,8 @@ void add_build_command(CLI::App& ebp_cmd) {
         std::printf("peak RSS %.0f MiB, memory budget %.0f MiB%s\n", double(peak) / 1048576.0, o->budget_mb,
                     double(peak) <= budget ? "" : " (EXCEEDED, see OUT_OF_CORE.md: what is bounded)");
         if (double(rep.min_budget_bytes) > budget)
-          std::printf("note: this model needs a budget of at least %.0f MiB (float vertices %.0f MiB, node skeleton "
-                      "and top tree, fixed reserve)\n",
+          std::printf("note: this model needs a budget of at least %.0f MiB (mesh source %.0f MiB: float vertices, "
+                      "read buffers, an STL's weld table; node skeleton and top tree, fixed reserve)\n",
                       double(rep.min_budget_bytes) / 1048576.0, double(src->resident_bytes()) / 1048576.0);
       }
       return;

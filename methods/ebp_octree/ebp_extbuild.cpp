@@ -14,14 +14,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <condition_variable>
 #include <deque>
 #include <mutex>
 #include <queue>
 #include <thread>
-#include <sstream>
 #include <stdexcept>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -32,10 +30,8 @@
 #include "ebp_build_parts.hpp"
 #include "ebp_io.hpp"
 #include "ebp_store.hpp"
-#include "errors.hpp"
-#include "mesh.hpp"
+#include "mesh_reader.hpp"
 #include "predicates.hpp"
-#include "sha256.hpp"
 
 namespace ebp {
 
@@ -90,253 +86,48 @@ class MemorySource final : public TriangleSource {
   const std::vector<std::array<std::uint32_t, 3>>& t_;
 };
 
-/// A mesh loaded whole (formats the streaming reader does not handle).
-class LoadedSource final : public TriangleSource {
+/// A mesh file in any format the harness reads, through its mesh reader (mesh_reader.hpp): the
+/// vertices read once into float (held), the triangles re-read from the file at every scan.
+class FileSource final : public TriangleSource {
  public:
-  explicit LoadedSource(const std::string& path) : mesh_(bvhbench::load_mesh(path)), inner_(mesh_.vertices, mesh_.triangles) {}
-  std::uint64_t num_triangles() const override { return inner_.num_triangles(); }
-  std::uint64_t num_vertices() const override { return inner_.num_vertices(); }
-  void scan(const Chunk& f) override { inner_.scan(f); }
-  std::string sha256() const override { return mesh_.sha256; }
-  const float* float_vertices() const override { return inner_.float_vertices(); }
-  std::size_t resident_bytes() const override { return mesh_.bytes() + inner_.resident_bytes(); }
-
- private:
-  bvhbench::Mesh mesh_;
-  MemorySource inner_;
-};
-
-/// Binary little-endian PLY: header parsed, vertices read once into floats, faces streamed.
-class PlySource final : public TriangleSource {
- public:
-  struct Layout {
-    std::uint64_t nv = 0, nf = 0;
-    std::size_t vstride = 0;
-    int off[3] = {-1, -1, -1};
-    bool dbl[3] = {false, false, false};
-    int count_size = 0;  // bytes of the list count (1, 2, 4)
-    int index_size = 0;  // bytes of an index (4)
-    bool index_signed = true;
-    std::size_t header_bytes = 0;
-  };
-  /// Returns false if the file is not a PLY this reader streams (the caller then loads it).
-  static bool probe(const std::string& path, Layout* lay) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return false;
-    std::string line;
-    if (!std::getline(in, line) || line != "ply") return false;
-    std::size_t bytes = line.size() + 1;
-    int element = 0;  // 1 vertex, 2 face
-    bool fmt = false;
-    std::size_t voff = 0;
-    bool face_list = false;
-    int elements = 0;
-    auto scalar_size = [](const std::string& t) -> int {
-      if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-      if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-      if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
-      if (t == "double" || t == "float64") return 8;
-      return 0;
-    };
-    while (std::getline(in, line)) {
-      bytes += line.size() + 1;
-      if (!line.empty() && line.back() == '\r') return false;
-      std::istringstream ls(line);
-      std::string w;
-      ls >> w;
-      if (w == "format") {
-        std::string f;
-        ls >> f;
-        if (f != "binary_little_endian") return false;
-        fmt = true;
-      } else if (w == "comment" || w == "obj_info") {
-      } else if (w == "element") {
-        std::string name;
-        std::uint64_t n = 0;
-        ls >> name >> n;
-        ++elements;
-        if (elements == 1 && name == "vertex") { element = 1; lay->nv = n; }
-        else if (elements == 2 && name == "face") { element = 2; lay->nf = n; }
-        else return false;
-      } else if (w == "property") {
-        std::string t;
-        ls >> t;
-        if (element == 1) {
-          if (t == "list") return false;
-          std::string name;
-          ls >> name;
-          const int s = scalar_size(t);
-          if (!s) return false;
-          for (int k = 0; k < 3; ++k)
-            if (name == std::string(1, char('x' + k))) {
-              if (t != "float" && t != "float32" && t != "double" && t != "float64") return false;
-              lay->off[k] = int(voff);
-              lay->dbl[k] = s == 8;
-            }
-          voff += std::size_t(s);
-        } else if (element == 2) {
-          if (t != "list" || face_list) return false;
-          std::string ct, it, name;
-          ls >> ct >> it >> name;
-          if (name != "vertex_indices" && name != "vertex_index") return false;
-          lay->count_size = scalar_size(ct);
-          if (ct == "float" || ct == "double" || ct == "float32" || ct == "float64" || lay->count_size == 8) return false;
-          if (it != "int" && it != "uint" && it != "int32" && it != "uint32") return false;
-          lay->index_size = 4;
-          lay->index_signed = it == "int" || it == "int32";
-          face_list = true;
-        } else {
-          return false;
-        }
-      } else if (w == "end_header") {
-        lay->header_bytes = bytes;
-        lay->vstride = voff;
-        return fmt && elements == 2 && face_list && lay->off[0] >= 0 && lay->off[1] >= 0 && lay->off[2] >= 0 &&
-               lay->nv > 0 && lay->nf > 0 && lay->count_size != 0;
-      } else {
-        return false;
-      }
-    }
-    return false;
+  explicit FileSource(const std::string& path) : reader_(bvhbench::MeshReader::open(path)) {
+    vf_.reserve(3 * std::size_t(reader_->num_vertices()));  // the header's count, checked against the file size
+    reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) vf_.push_back(float(v[i][k]));
+    });
+    vf_.shrink_to_fit();
   }
-
-  PlySource(const std::string& path, const Layout& lay) : path_(path), lay_(lay) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw bvhbench::file_error(path, std::string("cannot open: ") + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd_, &st) != 0) throw bvhbench::file_error(path, "cannot stat");
-    file_size_ = std::uint64_t(st.st_size);
-    if (lay.nv >= (1ull << 32)) fail("too many vertices");
-    const std::uint64_t vbytes = lay.nv * lay.vstride;
-    if (lay.header_bytes + vbytes > file_size_) fail("truncated (the vertex data is incomplete)");
-    // Header and vertices: hashed now, the faces at the first scan.
-    std::vector<std::uint8_t> buf(std::min<std::uint64_t>(lay.header_bytes, 1 << 20));
-    read_exact(0, buf.data(), lay.header_bytes, true);
-    v_.resize(3 * lay.nv);
-    const std::size_t per = std::max<std::size_t>(1, (std::size_t(8) << 20) / lay.vstride);
-    std::vector<std::uint8_t> vb(per * lay.vstride);
-    std::uint64_t off = lay.header_bytes;
-    for (std::uint64_t i = 0; i < lay.nv; i += per) {
-      const std::size_t n = std::size_t(std::min<std::uint64_t>(per, lay.nv - i));
-      read_exact(off, vb.data(), n * lay.vstride, true);
-      off += n * lay.vstride;
-      for (std::size_t j = 0; j < n; ++j)
-        for (int k = 0; k < 3; ++k) {
-          const std::uint8_t* p = vb.data() + j * lay.vstride + lay.off[k];
-          double d;
-          if (lay.dbl[k]) std::memcpy(&d, p, 8);
-          else { float f; std::memcpy(&f, p, 4); d = f; }
-          if (!std::isfinite(d)) fail("vertex " + std::to_string(i + j) + " has a non-finite coordinate");
-          v_[3 * (i + j) + std::size_t(k)] = float(d);
-        }
-    }
-    face_off_ = off;
-    ntri_ = lay.nf;  // an estimate (exact for triangle faces) until the first scan counts them
+  std::uint64_t num_triangles() const override { return reader_->num_triangles(); }
+  std::uint64_t num_vertices() const override { return reader_->num_vertices(); }
+  std::string sha256() const override { return reader_->sha256(); }
+  const float* float_vertices() const override { return vf_.data(); }
+  /// The float vertices, the reader's buffers (an STL's weld table among them) and one chunk.
+  std::size_t resident_bytes() const override {
+    return vf_.capacity() * sizeof(float) + reader_->resident_bytes() +
+           kChunk * (3 * sizeof(std::uint32_t) + 9 * sizeof(float));
   }
-  ~PlySource() override {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  std::uint64_t num_triangles() const override { return ntri_; }
-  std::uint64_t num_vertices() const override { return lay_.nv; }
-  std::string sha256() const override { return sha_; }
-  const float* float_vertices() const override { return v_.data(); }
-  std::size_t resident_bytes() const override { return v_.capacity() * sizeof(float) + (std::size_t(4) << 20); }
   bool streaming() const override { return true; }
 
   void scan(const Chunk& f) override {
-    const bool hashing = !hashed_;
-    std::vector<std::uint8_t> buf(std::size_t(4) << 20);
-    std::size_t have = 0, pos = 0;
-    std::uint64_t off = face_off_;
-    auto need = [&](std::size_t n) {  // ensure n bytes at pos
-      if (have - pos >= n) return true;
-      std::memmove(buf.data(), buf.data() + pos, have - pos);
-      have -= pos;
-      pos = 0;
-      if (buf.size() < n) buf.resize(n);
-      while (have < n) {
-        const std::size_t want = std::size_t(std::min<std::uint64_t>(buf.size() - have, file_size_ - off));
-        if (want == 0) return false;
-        read_exact(off, buf.data() + have, want, hashing);
-        off += want;
-        have += want;
-      }
-      return true;
-    };
     std::vector<std::uint32_t> idx;
     std::vector<float> xyz;
-    std::vector<std::uint32_t> poly;
-    std::uint64_t t = 0;
-    auto flush = [&] {
-      if (idx.empty()) return;
-      const std::size_t n = idx.size() / 3;
-      f(t - n, n, idx.data(), xyz.data());
-      idx.clear();
-      xyz.clear();
-    };
-    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-      for (std::uint32_t v : {a, b, c}) {
-        idx.push_back(v);
-        xyz.insert(xyz.end(), &v_[3 * std::size_t(v)], &v_[3 * std::size_t(v)] + 3);
-      }
-      ++t;
-      if (idx.size() >= 3 * kChunk) flush();
-    };
-    for (std::uint64_t fi = 0; fi < lay_.nf; ++fi) {
-      if (!need(std::size_t(lay_.count_size))) fail("truncated (face " + std::to_string(fi) + " is missing)");
-      std::uint64_t cnt = 0;
-      const std::uint8_t* p = buf.data() + pos;
-      if (lay_.count_size == 1) cnt = p[0];
-      else if (lay_.count_size == 2) { std::uint16_t c; std::memcpy(&c, p, 2); cnt = c; }
-      else { std::uint32_t c; std::memcpy(&c, p, 4); cnt = c; }
-      pos += std::size_t(lay_.count_size);
-      if (cnt < 3) fail("face " + std::to_string(fi) + " has " + std::to_string(cnt) + " vertices (at least 3 needed)");
-      if (cnt > (1u << 24)) fail("face " + std::to_string(fi) + " has too many vertices");
-      if (!need(std::size_t(cnt) * 4)) fail("truncated (face " + std::to_string(fi) + " is incomplete)");
-      poly.resize(std::size_t(cnt));
-      for (std::size_t k = 0; k < cnt; ++k) {
-        std::uint32_t v;
-        std::memcpy(&v, buf.data() + pos + 4 * k, 4);
-        if ((lay_.index_signed && std::int32_t(v) < 0) || v >= lay_.nv)
-          fail("face " + std::to_string(fi) + " refers to vertex " +
-               (lay_.index_signed ? std::to_string(std::int32_t(v)) : std::to_string(v)) + ", out of range (" +
-               std::to_string(lay_.nv) + " vertices)");
-        poly[k] = v;
-      }
-      pos += std::size_t(cnt) * 4;
-      for (std::size_t j = 1; j + 1 < poly.size(); ++j) emit(poly[0], poly[j], poly[j + 1]);
-    }
-    flush();
-    if (hashing) {  // the rest of the file (trailing bytes) belongs to the hash too
-      while (off < file_size_) {
-        const std::size_t want = std::size_t(std::min<std::uint64_t>(buf.size(), file_size_ - off));
-        read_exact(off, buf.data(), want, true);
-        off += want;
-      }
-      sha_ = sha_ctx_.hex_digest();
-      hashed_ = true;
-    }
-    ntri_ = t;
+    reader_->read_triangles([&](std::uint64_t first, const bvhbench::Triangle* t, std::size_t n) {
+      idx.resize(3 * n);
+      xyz.resize(9 * n);
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t v = t[i][k];
+          idx[3 * i + std::size_t(k)] = v;
+          std::memcpy(&xyz[9 * i + 3 * std::size_t(k)], &vf_[3 * std::size_t(v)], 3 * sizeof(float));
+        }
+      f(first, n, idx.data(), xyz.data());
+    });
   }
 
  private:
-  [[noreturn]] void fail(const std::string& what) const { throw bvhbench::file_error(path_, what); }
-  void read_exact(std::uint64_t off, void* dst, std::size_t n, bool hash) {
-    switch (io::pread_full(fd_, dst, n, off)) {
-      case io::ReadEnd::complete: break;
-      case io::ReadEnd::error: fail(std::string("read failed: ") + std::strerror(errno));
-      case io::ReadEnd::end_of_file: fail("truncated (unexpected end of file)");
-    }
-    if (hash) sha_ctx_.update(dst, n);
-  }
-  std::string path_;
-  Layout lay_;
-  int fd_ = -1;
-  std::uint64_t file_size_ = 0, face_off_ = 0, ntri_ = 0;
-  std::vector<float> v_;
-  bvhbench::Sha256 sha_ctx_;
-  bool hashed_ = false;
-  std::string sha_;
+  std::unique_ptr<bvhbench::MeshReader> reader_;
+  std::vector<float> vf_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -837,11 +628,7 @@ std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& ver
   return std::make_unique<MemorySource>(vertices, triangles);
 }
 
-std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path) {
-  PlySource::Layout lay;
-  if (PlySource::probe(path, &lay)) return std::make_unique<PlySource>(path, lay);
-  return std::make_unique<LoadedSource>(path);
-}
+std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path) { return std::make_unique<FileSource>(path); }
 
 namespace {
 

@@ -31,18 +31,21 @@ class TriangleSource {
   /// The vertices as float (x, y, z per vertex, 3 × num_vertices()), held by the source: the
   /// sorted records carry vertex indices and the leaves read their coordinates here.
   virtual const float* float_vertices() const = 0;
-  /// Memory the source holds (its float vertices, buffers).
+  /// Memory the source holds (its float vertices, buffers, an STL's weld table).
   virtual std::size_t resident_bytes() const = 0;
-  /// Whether the source streams the file (false: the whole mesh was loaded, see OUT_OF_CORE.md).
+  /// Whether the source streams a file (false: a mesh held in memory).
   virtual bool streaming() const { return false; }
 };
 
 /// Over vertices/triangles in memory (no copy: coordinates rounded to float on the fly).
 std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& vertices,
                                                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
-/// Binary little-endian PLY with triangle faces: vertices held as float (12 B each), faces
-/// streamed from the file at every scan. Any other file: loaded with bvhbench::load_mesh (not
-/// bounded; said by streaming() == false).
+/// A mesh file in any format bvhbench reads (PLY with faces or strips, OBJ, STL, OFF), streamed
+/// through the harness's mesh reader (mesh_reader.hpp): the vertices read once and held as float
+/// (12 B each), the triangles re-read from the file at every scan. What the source holds besides
+/// (the reader's buffers; an STL's weld table, ≈ 20–28 B per vertex) is in resident_bytes().
+/// Throws InputError for a file the reader refuses (its vertices are read here; the faces'
+/// problems are found at the first scan).
 std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path);
 
 struct ExtBuildOptions {

@@ -153,7 +153,7 @@ void add_stats_command(CLI::App& ebp_cmd) {
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = ebp_cmd.add_subcommand("stats", "Build the EBP-Octree on a mesh and print its figures");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY or OBJ)")->required();
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
   cmd->add_option("--param", o->params, "Build parameter key=value (repeatable): leaf_factor, max_planes, cluster_angle");
   cmd->add_option("--threads", o->threads, "Build threads")->check(CLI::Range(1, 1024));
   cmd->add_flag("--json", o->json, "Machine-readable output");

@@ -22,6 +22,7 @@
 #include "ebp_store.hpp"
 #include "errors.hpp"
 #include "mesh.hpp"
+#include "sha256.hpp"
 #include "test_support.hpp"
 
 using namespace ebp;
@@ -322,6 +323,82 @@ TEST(EbpExtBuild, StreamedPlyWithPolygonsAndExtraProperties) {
   EXPECT_THROW(build_store_external(*bad, d.file("c.ebp"), tiny_options(d)), bvhbench::InputError);
   EXPECT_FALSE(fs::exists(d.file("c.ebp")));
   EXPECT_TRUE(fs::is_empty(d.runs()));
+}
+
+// Every format streams (vertices as float, triangles re-read per scan): the same mesh written as
+// PLY, binary and ASCII STL, OFF, OBJ and a tristrip PLY (restarts, joins, big endian, extra
+// vertex properties) gives the same store file, byte for byte (pages, CRCs), as the PLY, which is
+// the in-memory build's (check_same). The STL's weld table is resident and counted in the
+// build's minimum budget.
+TEST(EbpExtBuild, EveryFormatStreamsTheSameStore) {
+  for (const char* name : {"cow.obj", "spot.obj"}) {
+    SCOPED_TRACE(name);
+    TmpDir d;
+    const bvhbench::Mesh m = bvhbench::test::stl_canonical(bvhbench::load_mesh(shared_mesh(name)));
+    check_same(m, name);
+    bvhbench::write_ply(d.file("m.ply"), m);
+    std::uint64_t joins = 0;
+    const std::pair<const char*, std::string> files[] = {
+        {"m.stl", bvhbench::test::stl_binary_bytes(m)},  {"ascii.stl", bvhbench::test::stl_ascii_bytes(m)},
+        {"m.off", bvhbench::test::off_bytes(m, "COFF")}, {"m.obj", bvhbench::test::obj_bytes(m)},
+        {"strips.ply", bvhbench::test::tristrip_ply_bytes(m, &joins)}};
+    auto build = [&](const std::string& file, ExtBuildReport* rep, std::size_t* resident) {
+      auto src = open_mesh_source(d.file(file));
+      EXPECT_TRUE(src->streaming());
+      EXPECT_EQ(src->num_vertices(), m.vertices.size());
+      const std::string out = d.file(file + ".ebp");
+      *rep = build_store_external(*src, out, tiny_options(d));
+      EXPECT_EQ(src->num_triangles(), m.triangles.size());
+      EXPECT_EQ(src->sha256(), bvhbench::sha256_file(d.file(file)));
+      *resident = src->resident_bytes();
+      return read_range(out, 0, std::size_t(fs::file_size(out)));
+    };
+    ExtBuildReport ply_rep;
+    std::size_t ply_resident = 0;
+    const auto ply_store = build("m.ply", &ply_rep, &ply_resident);
+    for (const auto& [file, bytes] : files) {
+      SCOPED_TRACE(file);
+      bvhbench::test::write_file_bytes(d.file(file), bytes);
+      ExtBuildReport rep;
+      std::size_t resident = 0;
+      EXPECT_TRUE(build(file, &rep, &resident) == ply_store) << "the same store as from the PLY";
+      EXPECT_EQ(rep.min_budget_bytes - resident, ply_rep.min_budget_bytes - ply_resident);
+      if (std::string(file).find(".stl") != std::string::npos) {
+        EXPECT_GE(resident, ply_resident + 12 * m.vertices.size()) << "the weld table is resident and counted";
+      }
+    }
+    EXPECT_GT(joins, 0u);
+    EXPECT_TRUE(fs::is_empty(d.runs()));
+  }
+}
+
+// A malformed file of any format is an InputError naming it, and nothing is written: problems of
+// the vertices when the source opens, problems of the faces at the first scan.
+TEST(EbpExtBuild, MalformedFilesOfEveryFormatLeaveNothing) {
+  TmpDir d;
+  const struct { const char *file, *bytes, *problem; } bad[] = {
+      {"v.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "vertex 1 has a NaN coordinate"},
+      {"f.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "face 0 has vertex index 7 out of range"},
+      {"f.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "face 1 has vertex index 9 out of range"},
+      {"t.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n",
+       "facet 0 has 2 vertices"},
+      {"s.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                "element tristrips 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                "4 0 1 2 5\n", "tristrips 0 has vertex index 5 out of range"}};
+  for (const auto& [file, bytes, problem] : bad) {
+    SCOPED_TRACE(file);
+    bvhbench::test::write_file_bytes(d.file(file), bytes);
+    const std::string out = d.file(std::string(file) + ".ebp");
+    bvhbench::test::expect_input_error(
+        [&] {
+          auto src = open_mesh_source(d.file(file));
+          build_store_external(*src, out, tiny_options(d));
+        },
+        file, problem);
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(out + ".tmp"));
+    EXPECT_TRUE(fs::is_empty(d.runs()));
+  }
 }
 
 TEST(EbpExtBuild, CliFileSizeLimitLeavesNothing) {

@@ -11,9 +11,11 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -99,6 +101,151 @@ inline void expect_input_error(const std::function<void()>& f, const std::string
     EXPECT_NE(msg.find(name), std::string::npos) << msg;
     EXPECT_NE(msg.find(problem), std::string::npos) << "expected '" << problem << "' in: " << msg;
   }
+}
+
+// ---- one mesh in every format (the bytes of a file) ----
+//
+// Coordinates are written as the shortest text that reads back as the same double (to_chars),
+// so a text file reads the same values as a binary one.
+
+/// Shortest decimal text that reads back as exactly `v`.
+inline std::string exact_text(double v) {
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+/// Appends the low `size` bytes of v, little endian (or big endian).
+inline void put_bytes(std::string& s, std::uint64_t v, int size, bool big = false) {
+  for (int i = 0; i < size; ++i) s += char((v >> (8 * (big ? size - 1 - i : i))) & 0xff);
+}
+inline void put_float(std::string& s, float f, bool big = false) {
+  std::uint32_t u;
+  std::memcpy(&u, &f, 4);
+  put_bytes(s, u, 4, big);
+}
+
+/// A binary STL of m's triangles: float32 corners, zero normals; `header` (at most 80 bytes)
+/// starts the 80-byte header ("solid ..." by default: the classic trap).
+inline std::string stl_binary_bytes(const Mesh& m, const std::string& header = "solid bvhbench test") {
+  std::string s = header;
+  s.resize(80, ' ');
+  put_bytes(s, m.triangles.size(), 4);
+  for (const auto& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) put_float(s, 0.f);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) put_float(s, float(m.vertices[t[c]][k]));
+    put_bytes(s, 0, 2);
+  }
+  return s;
+}
+
+/// An ASCII STL of m's triangles (each coordinate as the text of its float32 value).
+inline std::string stl_ascii_bytes(const Mesh& m) {
+  std::string s = "solid test\n";
+  for (const auto& t : m.triangles) {
+    s += "facet normal 0 0 0\n outer loop\n";
+    for (int c = 0; c < 3; ++c) {
+      s += "  vertex";
+      for (int k = 0; k < 3; ++k) s += " " + exact_text(double(float(m.vertices[t[c]][k])));
+      s += "\n";
+    }
+    s += " endloop\nendfacet\n";
+  }
+  return s + "endsolid test\n";
+}
+
+/// An OFF file of m: `keyword` ("OFF", "COFF": then a colour after each vertex and face).
+inline std::string off_bytes(const Mesh& m, const std::string& keyword = "OFF") {
+  const bool colour = keyword == "COFF";
+  std::string s = keyword + "\n# written by a test\n" + std::to_string(m.vertices.size()) + " " +
+                  std::to_string(m.triangles.size()) + " 0\n";
+  for (const Vec3d& v : m.vertices)
+    s += exact_text(v.x) + " " + exact_text(v.y) + " " + exact_text(v.z) + (colour ? " 255 128 0 255\n" : "\n");
+  for (const auto& t : m.triangles)
+    s += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) +
+         (colour ? " 0.5 0.5 0.5\n" : "\n");
+  return s;
+}
+
+/// An OBJ file of m (`v` and `f` lines).
+inline std::string obj_bytes(const Mesh& m) {
+  std::string s = "# written by a test\n";
+  for (const Vec3d& v : m.vertices) s += "v " + exact_text(v.x) + " " + exact_text(v.y) + " " + exact_text(v.z) + "\n";
+  for (const auto& t : m.triangles)
+    s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1) + "\n";
+  return s;
+}
+
+/// A binary big-endian PLY that stores m's triangles as one `tristrips` item, the way scans
+/// store them: float x y z plus `confidence` and `intensity` per vertex, the triangles in order,
+/// every fifth one after a -1 restart and the others after a join (the previous strip's last
+/// index and the next triangle's first, repeated: triangles with a repeated index, dropped by
+/// the reader). Each triangle starts at an even position of its strip, so it reads back as it
+/// is, corner for corner. Returns the bytes; `joins` (optional) gets the join count.
+inline std::string tristrip_ply_bytes(const Mesh& m, std::uint64_t* joins = nullptr) {
+  std::vector<std::int64_t> strip;
+  std::size_t since_restart = 0;  // entries since the last restart
+  std::uint64_t j = 0;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    if (i > 0 && i % 5 == 0) {
+      strip.push_back(-1);
+      since_restart = 0;
+    } else if (i > 0) {
+      const std::int64_t last = strip.back();
+      // last, a, a (and one more a if needed for an even position): every window is a join.
+      std::size_t n = 3 + ((since_restart + 2) % 2 == 0 ? 0 : 1);
+      strip.push_back(last);
+      for (std::size_t k = 1; k < n; ++k) strip.push_back(t[0]);
+      since_restart += n;
+      j += n + 1;  // the windows that end in the pushed entries, and the one ending in t[1]
+      strip.push_back(t[1]);
+      strip.push_back(t[2]);
+      since_restart += 2;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) strip.push_back(t[k]);
+    since_restart += 3;
+  }
+  if (joins) *joins = j;
+  std::string s = "ply\nformat binary_big_endian 1.0\ncomment a strip of joined and restarted triangles\n"
+                  "element vertex " + std::to_string(m.vertices.size()) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nproperty float confidence\n"
+                  "property float intensity\nelement tristrips 1\nproperty list int int vertex_indices\n"
+                  "end_header\n";
+  for (const Vec3d& v : m.vertices) {
+    for (int k = 0; k < 3; ++k) put_float(s, float(v[k]), true);
+    put_float(s, 0.75f, true);
+    put_float(s, 0.5f, true);
+  }
+  put_bytes(s, strip.size(), 4, true);
+  for (std::int64_t v : strip) put_bytes(s, std::uint64_t(v), 4, true);
+  return s;
+}
+
+/// m as an STL gives it back: each coordinate rounded to float32, corners welded exactly (equal
+/// values, so -0 == 0), vertices renumbered in order of first use by the triangles
+/// (unreferenced ones gone). Written in any of the formats above, it reads back the same.
+inline Mesh stl_canonical(const Mesh& m) {
+  Mesh r;
+  std::map<std::array<float, 3>, std::uint32_t> id;
+  for (const auto& t : m.triangles) {
+    std::array<std::uint32_t, 3> nt{};
+    for (int c = 0; c < 3; ++c) {
+      std::array<float, 3> key;
+      for (int k = 0; k < 3; ++k) key[k] = float(m.vertices[t[c]][k]) + 0.0f;  // -0 + 0 = +0
+      auto it = id.find(key);
+      if (it == id.end()) {
+        it = id.emplace(key, std::uint32_t(r.vertices.size())).first;
+        const Vec3d& v = m.vertices[t[c]];
+        r.vertices.emplace_back(double(float(v.x)), double(float(v.y)), double(float(v.z)));
+      }
+      nt[c] = it->second;
+    }
+    r.triangles.push_back(nt);
+  }
+  return r;
 }
 
 // ---- meshes made in code ----

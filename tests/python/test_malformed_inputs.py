@@ -47,7 +47,9 @@ def check_run(bvhbench, tmp_path, mesh, queries, named):
         assert r["status"] == "ok", r
 
 
-@pytest.mark.parametrize("name", ["good_ascii.ply", "good_binary_be.ply", "good_binary_le_double.ply", "good.obj"])
+@pytest.mark.parametrize("name", ["good_ascii.ply", "good_binary_be.ply", "good_binary_le_double.ply", "good.obj",
+                                  "good_tristrips_be.ply", "good_tristrips_ascii.ply", "good_binary.stl", "good_ascii.stl",
+                                  "good.off", "good_coff.off"])
 def test_mutated_meshes_are_refused_cleanly(bvhbench, tmp_path, queries, name):
     rng = random.Random(name)
     data = (FIXTURES / name).read_bytes()

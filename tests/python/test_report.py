@@ -1,8 +1,11 @@
-"""plots/report.py builds every chart and table from a small fixture result set.
+"""plots/report.py builds every chart and table from a small result set of the real runner.
 
-The fixture (tests/fixtures/results_small, written by its make_fixture.py) holds 5 methods on
-2 models, an EBP-Octree and an OpenVDB sweep, unsupported / crash / timeout / oom / error jobs,
-OpenVDB jobs with wrong answers, and 3 stress meshes.
+The fixture (tests/fixtures/results_small: a real suite run, tests/fixtures/results_small.yml,
+committed by its make_fixture.py; test_report_fixture.py checks it still matches the runner)
+holds 5 methods on 2 models (cow, fandisk), an EBP-Octree sweep around its default and an OpenVDB
+sweep without it, path-coherent variants, approximate OpenVDB answers, crash / timeout / oom /
+error / rejected_input jobs and 4 stress meshes. Expected figures are computed here from the
+fixture's own results, so that a regenerated fixture keeps the tests meaningful.
 """
 import json
 import os
@@ -18,10 +21,42 @@ FIXTURE = os.path.join(ROOT, "tests", "fixtures", "results_small")
 sys.path.insert(0, os.path.join(ROOT, "plots"))
 
 import charts  # noqa: E402
+import fmt  # noqa: E402
 import metrics  # noqa: E402
 import results_io  # noqa: E402
 
 EXPECTED_CHARTS = list(charts.CHARTS)
+STRESS_CASES = {"spot_open", "stress_nonmanifold_edges", "stress_single_triangle", "stress_empty"}
+
+
+def fixture_results():
+    """{job id: parsed result} of the committed fixture."""
+    runs = os.path.join(FIXTURE, "runs")
+    out = {}
+    for f in sorted(os.listdir(runs)):
+        with open(os.path.join(runs, f), encoding="utf-8") as fh:
+            r = json.load(fh)
+        out[r["job"]["id"]] = r
+    return out
+
+
+RESULTS = fixture_results()
+
+
+def qps(job_id):
+    return RESULTS[job_id]["queries"]["throughput_qps"]["median"]
+
+
+def table_line(md, *starts_and_parts):
+    """The one Markdown table line that starts with the first string and contains the others."""
+    start, *parts = starts_and_parts
+    found = [l for l in md.splitlines() if l.startswith(start) and all(p in l for p in parts)]
+    assert len(found) == 1, (starts_and_parts, found)
+    return found[0]
+
+
+def cells(line):
+    return [c.strip() for c in line.strip().strip("|").split("|")]
 
 
 def run_report(results, *extra):
@@ -62,9 +97,11 @@ def test_report_md_shows_every_chart(report):
 
 def test_report_states_machine_and_run(report):
     md = read(report / "report.md")
-    assert "bench-1" in md and "E5-2680" in md and "3f9c2a1b7e" in md and "2026-11-20" in md
-    assert "bench-1" in read(report / "paper_table.md")
-    assert "bench-1" in read(report / "paper_table.tex")
+    ctx = next(iter(RESULTS.values()))["context"]
+    for value in (ctx["host"], ctx["cpu_model"], ctx["git_commit"][:10], ctx["date"][:10]):
+        assert value in md
+    assert ctx["host"] in read(report / "paper_table.md")
+    assert ctx["host"] in read(report / "paper_table.tex")
 
 
 def test_paper_tables_have_ebp_row_ratios_and_published_figures(report):
@@ -72,51 +109,83 @@ def test_paper_tables_have_ebp_row_ratios_and_published_figures(report):
     tex = read(report / "paper_table.tex")
     assert "**ebp_octree**" in md
     assert "EBP/peer" in md and "peer/EBP" in md
-    # cgal_aabb on bunny: 180 kHz / 72 kHz random point-in-solid = 2.5x for the EBP-Octree.
-    cgal_bunny = next(line for line in md.splitlines()
-                      if line.startswith("| bunny") and "cgal_aabb" in line and "×" in line)
-    assert "| 2.5× |" in cgal_bunny
+    # cgal_aabb on cow, random point-in-solid: the EBP-Octree's rate over CGAL's.
+    ratio = qps("cow__random-n500-s1__inside__ebp_octree") / qps(
+        "cow__random-n500-s1__inside__cgal_aabb")
+    assert cells(table_line(md, "| cow | 5.8k | cgal_aabb |", "×"))[3] == fmt.ratio(ratio)
     assert "2.5 kHz" in md and "32 kHz" in md and "1 MHz" in md
     # A path-coherent variant is its own row, and not an EBP "peer" in the ratios.
     assert "**ebp_octree:coherent=true**" in md
-    assert "| bunny | 69.5k | ebp_octree:coherent=true |" not in md
-    assert "| 7 |" in md.split("**bunny**")[0] or "**7**" in md   # octree levels
+    assert "| cow | 5.8k | ebp_octree:coherent=true |" not in md
+    levels = RESULTS["cow__random-n500-s1__inside__ebp_octree"]["structure"]["levels"]
+    assert cells(table_line(md, "| **cow** | **5.8k** | **ebp_octree** |"))[3] == f"**{levels}**"
     assert r"\textbf{ebp\_octree}" in tex
     assert r"\begin{tabular}" in tex and r"\bottomrule" in tex
     assert "EBP/peer" in tex and r"$\times$" in tex
-    # A crashed or timed-out job shows its status, not an empty cell.
-    assert "crash" in md and "timeout" in md
+    # A job that did not finish ok shows its status, not an empty cell (the row of the fault
+    # method's representative configuration, one of its failing modes).
+    rep = results_io.representative_configs(results_io.load(FIXTURE).model_jobs())["fault"]
+    status = RESULTS[f"cow__random-n500-s1__inside__fault_{rep}"]["status"]
+    assert status in ("crash", "timeout")
+    main_table = md.split("\nRatios")[0]
+    assert cells(table_line(main_table, f"| cow | 5.8k | fault:{rep} |"))[7] == status
 
 
 def test_non_ok_jobs_are_listed_with_messages(report):
     md = read(report / "report.md")
-    section = md.split("## Jobs that did not finish ok")[1]
-    for status, message in [("unsupported", "capability 'distance' not provided"),
-                            ("crash", "SIGSEGV"), ("timeout", "time limit of 600 s"),
-                            ("oom", "address-space limit"), ("error", "plane fit failed")]:
-        row = next((l for l in section.splitlines() if l.startswith(f"| {status} |")), None)
-        assert row is not None, f"no {status} row"
-        assert message in row
+    section = md.split("## Jobs that did not finish ok")[1].split("\n## ")[0]
+    failed = {jid: r for jid, r in RESULTS.items() if r["status"] != "ok"}
+    assert {r["status"] for r in failed.values()} == {"crash", "timeout", "oom", "error",
+                                                       "rejected_input"}
+    for jid, r in failed.items():
+        row = table_line(section, f"| {r['status']} |", f"| {jid} |")
+        assert r["message"] and r["message"] in row
+    assert "SIGSEGV" in md or "Segmentation fault" in md
+
+
+def _wrong(r):
+    """Does an ok result break the report's accuracy tolerances? (Restated from the raw
+    numbers, independently of tables.accuracy_problems.)"""
+    acc = r.get("accuracy") or {}
+    inside, dist = acc.get("inside") or {}, acc.get("distance") or {}
+    return (inside.get("wrong_far", 0) > 0 or (dist.get("rel_error") or {}).get("max", 0) > 1e-5
+            or dist.get("sign_wrong", 0) > 0 or dist.get("non_finite", 0) > 0)
 
 
 def test_accuracy_warnings_come_first_and_name_the_wrong_jobs(report):
     md = read(report / "report.md")
     assert md.index("## Accuracy warnings") < md.index("## The paper's tables")
     warnings = md.split("## Accuracy warnings")[1].split("\n## ")[0]
-    assert "openvdb:voxel=0.01" in warnings and "far from the surface" in warnings
-    assert "distance error up to" in warnings
-    assert "stress_duplicate" in warnings            # ebp_octree wrong far on a stress case
-    assert "| cgal_aabb |" not in warnings            # exact methods are not accused
-    assert "spot_noisy__random-n10000-s1__inside__embree" in warnings   # no oracle: said so
+    listed = {cells(l)[-1] for l in warnings.splitlines() if l.startswith("| ") and "__" in l}
+    expected = {jid for jid, r in RESULTS.items() if r["status"] == "ok" and _wrong(r)}
+    assert listed == expected
+    # The fixture's approximate method is accused, on a model and on a stress case, of each
+    # kind of problem; the exact methods are not.
+    assert "openvdb:voxel=3" in warnings and "far from the surface" in warnings
+    assert "distance error up to" in warnings and "distances with the wrong sign" in warnings
+    assert "| spot_open |" in warnings
+    for exact in ("ebp_octree", "cgal_aabb", "embree", "brute_force"):
+        assert f"| {exact}" not in warnings
 
 
-def test_stability_matrix_csv_and_md(report):
+def test_stability_matrix_csv_and_md(report, tmp_path):
     csv_text = read(report / "stability.csv")
     assert csv_text.splitlines()[0].startswith("query,method,mesh,status")
-    assert "stress_duplicate" in csv_text and ",oom," in csv_text
-    assert "spot_noisy" in csv_text                   # stress case known by metadata only
-    assert "bunny" not in csv_text and "lucy" not in csv_text
-    assert "oom" in read(report / "stability.md")
+    for case in STRESS_CASES:
+        assert f",{case}," in csv_text
+    assert "cow" not in csv_text and "fandisk" not in csv_text
+    assert ",rejected_input," in csv_text and ",ok_wrong," in csv_text and ",oom," in csv_text
+    md = read(report / "stability.md")
+    assert "**rejected_input**" in md and "**oom**" in md and "**wrong**" in md
+    # One matrix: the command-line tool writes the same CSV from the same results.
+    tool = os.path.join(ROOT, "tools", "stability_matrix.py")
+    proc = subprocess.run([sys.executable, tool, str(report.parent), "--out", str(tmp_path)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert read(tmp_path / "stability_matrix.csv") == csv_text
+    # report.md shows the matrix too, with the same cells.
+    matrix = md.split("## Every cell")[0].split("| inside \\ mesh |", 1)[1]
+    assert matrix in read(report / "report.md")
 
 
 def test_missing_runs_dir_is_a_clear_error(tmp_path):
@@ -148,10 +217,16 @@ def test_sparse_and_broken_results_do_not_break_the_report(tmp_path):
         "job": {"method": "newmethod", "query": "distance",
                 "mesh": {"name": "cow", "triangles": 5804}, "queries": {"kind": "random", "n": 10}},
         "queries": {"throughput_qps": {"median": 1000.0}}}))
+    # No method of today's runner declines a query type; a status row as run_job writes it.
+    unsupported = json.loads(json.dumps(RESULTS["cow__random-n500-s1__inside__fault_mode=crash"]))
+    unsupported.update(status="unsupported", message="fault does not answer inside queries")
+    (runs / "unsupported.json").write_text(json.dumps(unsupported))
     proc = run_report(tmp_path, "--strict")
     assert proc.returncode == 0, proc.stderr
     md = read(tmp_path / "report" / "report.md")
     assert "signal 6" in md and "broken.json" in md and "Not drawn" in md
+    assert "| unsupported |" in md and "fault does not answer inside queries" in md
+    assert "Not checked (no oracle): 1 ok job(s)" in md
 
 
 def test_pareto_front():
@@ -168,8 +243,9 @@ def test_every_metric_declares_a_direction():
 def test_representative_config_prefers_defaults(tmp_path):
     rs = results_io.load(FIXTURE)
     reps = results_io.representative_configs(rs.model_jobs())
-    assert reps["ebp_octree"] == "" and reps["openvdb"] == "voxel=0.01"
-    assert rs.stress_meshes == {"stress_degenerate", "stress_duplicate", "spot_noisy"}
+    # ebp_octree ran its defaults; openvdb did not: voxel=3 ran on both models, 1.5 on one.
+    assert reps["ebp_octree"] == "" and reps["openvdb"] == "voxel=3"
+    assert rs.stress_meshes == STRESS_CASES
 
 
 def _job(mesh, status, method="m"):
@@ -191,6 +267,15 @@ def test_stress_suite_recognised_by_its_failures():
                                                                                   "d"}
 
 
+def test_stress_mesh_known_by_metadata():
+    """A result whose mesh carries a stress tag (the runner writes none today; a mesh made
+    elsewhere may) is a stress case whatever its name."""
+    tagged = _job("spot_noisy", "ok")
+    tagged.raw["job"]["mesh"]["family"] = "stress"
+    jobs = [tagged] + [_job(m, "ok") for m in ("cow", "fandisk")]
+    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == {"spot_noisy"}
+
+
 def test_unknown_methods_get_a_stable_colour():
     import style
     assert style.method_color("ebp_octree") == style.METHOD_COLORS["ebp_octree"]
@@ -198,23 +283,31 @@ def test_unknown_methods_get_a_stable_colour():
     assert style.method_color("my_new_bvh").startswith("#")
 
 
-def test_coherent_peer_is_compared_with_the_coherent_ebp_variant(tmp_path):
+def test_coherent_peer_is_compared_with_the_coherent_ebp_variant(report):
     """A path-coherent peer row's ratio uses the EBP-Octree's coherent variant (same coherence on
-    both sides), not its default: bunny haptic inside, EBP coherent 1.6 MHz / Embree coherent
-    800 kHz = 2x (against the default EBP's 900 kHz it would be 1.12x)."""
-    results = tmp_path / "results_small"
-    shutil.copytree(FIXTURE, results, ignore=shutil.ignore_patterns("*.py"))
-    src = results / "runs" / "bunny__haptic-n20000-s1__inside__embree.json"
-    r = json.loads(src.read_text())
-    r["job"]["id"] += "-coherent=true"
-    r["job"]["method_spec"] = "embree:coherent=true"
-    r["job"]["params"]["coherent"] = "true"
-    r["job"]["params_key"] = "coherent=true"
-    tq = r["queries"]["throughput_qps"]
-    tq.update(median=800000.0, min=790000.0, max=810000.0, samples=[790000.0, 800000.0, 810000.0])
-    (results / "runs" / (r["job"]["id"] + ".json")).write_text(json.dumps(r))
-    proc = run_report(results)
-    assert proc.returncode == 0, proc.stderr
-    md = read(results / "report" / "paper_table.md")
-    line = next(x for x in md.splitlines() if x.startswith("| bunny") and "embree:coherent=true" in x and "×" in x)
-    assert line.split("|")[5].strip() == "2×", line
+    both sides), not its default: cow haptic inside, EBP coherent / Embree coherent."""
+    peer = qps("cow__haptic-n500-s1__inside__embree_coherent=true")
+    coherent = fmt.ratio(qps("cow__haptic-n500-s1__inside__ebp_octree_coherent=true") / peer)
+    default = fmt.ratio(qps("cow__haptic-n500-s1__inside__ebp_octree") / peer)
+    assert coherent != default, "the fixture cannot tell the two apart; regenerate it"
+    md = read(report / "paper_table.md")
+    line = table_line(md, "| cow", "embree:coherent=true", "×")
+    assert cells(line)[4] == coherent, line
+
+
+def test_median_is_the_harness_median():
+    """One median for tables, charts and the representative configuration, computed as the
+    harness computes its own (the middle two averaged)."""
+    assert results_io.median([3.0, None, 1.0, 2.0]) == 2.0
+    assert results_io.median([4.0, 1.0, 2.0, 3.0]) == 2.5
+    assert results_io.median([None]) is None and results_io.median([]) is None
+
+
+def test_non_finite_distances_are_wrong_answers():
+    """The harness keeps NaN and infinite distances out of the error statistics, so a job that
+    answered only NaN has no error to speak of: it must be flagged by its count."""
+    import tables
+    job = results_io.Job({"status": "ok", "job": {"method": "m", "query": "distance"},
+                          "accuracy": {"distance": {"rel_error": {"max": 0.0, "p99": 0.0},
+                                                    "sign_wrong": 0, "non_finite": 3}}}, "m.json")
+    assert tables.accuracy_problems(job) == ["3 non-finite distances (NaN or infinite)"]
