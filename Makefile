@@ -107,7 +107,7 @@ rebaseline: build
 	 else echo "rebaseline: tools/ci_gate.sh not present yet"; exit 1; fi
 
 # The report tests' fixture is a real suite run; a change of parameters, job ids or result keys
-# makes tests/python/test_report_fixture.py ask for this.
+# makes tests/python/plots/test_report_fixture.py ask for this.
 fixture: build
 	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(VPY) tests/fixtures/results_small/make_fixture.py
 

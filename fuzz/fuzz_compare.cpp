@@ -1,4 +1,4 @@
-// Fuzz target: `bvhbench compare`'s reading of result files (harness/compare.hpp: parse_result,
+// Fuzz target: `bvhbench compare`'s reading of result files (harness/run/compare.hpp: parse_result,
 // the validation that compare relies on), and the comparison itself on what it accepted.
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted result must go through the whole
@@ -11,8 +11,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "compare.hpp"
 #include "fuzz_contract.hpp"
+#include "harness/run/compare.hpp"
 
 using namespace bvhbench;
 using json = nlohmann::json;

@@ -14,8 +14,8 @@
 #include <string_view>
 #include <utility>
 
-#include "errors.hpp"
-#include "printable.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/printable.hpp"
 
 namespace bvhbench::fuzz {
 

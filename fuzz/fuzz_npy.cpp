@@ -1,4 +1,4 @@
-// Fuzz target: the .npy reader (harness/npy.hpp: parse_npy / read_npy_from, parse_points_npy).
+// Fuzz target: the .npy reader (harness/io/npy.hpp: parse_npy / read_npy_from, parse_points_npy).
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted array must be what its header says (data
 // of product(shape) * itemsize bytes, kept little-endian), must write back and read back to the
@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_contract.hpp"
-#include "npy.hpp"
+#include "harness/io/npy.hpp"
 
 using namespace bvhbench;
 

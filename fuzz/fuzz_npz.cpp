@@ -1,4 +1,4 @@
-// Fuzz target: the .npz reader and the ZIP container under it (harness/npz.hpp, harness/zip.hpp;
+// Fuzz target: the .npz reader and the ZIP container under it (harness/io/npz.hpp, harness/io/zip.hpp;
 // zlib's inflate): central directory, ZIP64 records, local headers, stored and deflated entries,
 // CRC-32, and each entry's .npy.
 //
@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_contract.hpp"
-#include "npz.hpp"
+#include "harness/io/npz.hpp"
 
 using namespace bvhbench;
 

@@ -1,4 +1,4 @@
-// Fuzz target: the text points reader (harness/points_text.hpp: .xyz / .csv).
+// Fuzz target: the text points reader (harness/io/points_text.hpp: .xyz / .csv).
 //
 // Beyond the contract (fuzz_contract.hpp): the text is read once in one piece and once in small
 // pieces (1 to 64 bytes, chosen by the input's length), as a file larger than the reader's
@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "fuzz_contract.hpp"
-#include "points_text.hpp"
+#include "harness/io/points_text.hpp"
 
 using namespace bvhbench;
 

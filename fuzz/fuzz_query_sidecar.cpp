@@ -1,4 +1,4 @@
-// Fuzz target: the check of a query set's sidecar JSON (harness/query_set.hpp: parse_sidecar),
+// Fuzz target: the check of a query set's sidecar JSON (harness/core/query_set.hpp: parse_sidecar),
 // for a query set of 3 points.
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted sidecar must give what the runner reads
@@ -8,7 +8,8 @@
 #include <cstdint>
 
 #include "fuzz_contract.hpp"
-#include "query_set.hpp"
+#include "harness/core/query_set.hpp"
+#include "harness/io/query_set_io.hpp"
 
 using namespace bvhbench;
 

@@ -1,4 +1,4 @@
-// Fuzz target: the suite loader (harness/suite.hpp: parse_suite; yaml-cpp underneath), with the
+// Fuzz target: the suite loader (harness/run/suite.hpp: parse_suite; yaml-cpp underneath), with the
 // methods of this build registered.
 //
 // Beyond the contract (fuzz_contract.hpp), an accepted suite must hold what the runner relies on
@@ -12,7 +12,7 @@
 #include <set>
 
 #include "fuzz_contract.hpp"
-#include "suite.hpp"
+#include "harness/run/suite.hpp"
 
 using namespace bvhbench;
 

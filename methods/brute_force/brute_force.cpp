@@ -9,8 +9,8 @@
 //    (up to rounding for points on the surface), and a principled answer on open ones.
 #include <cmath>
 
-#include "mesh.hpp"
-#include "registry.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/registry.hpp"
 
 namespace bvhbench {
 namespace {

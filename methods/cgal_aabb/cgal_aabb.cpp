@@ -45,11 +45,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "errors.hpp"
-#include "mesh.hpp"
-#include "method_support.hpp"
-#include "registry.hpp"
-#include "system_info.hpp"
+#include "harness/core/library_versions.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/method_support.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/process_memory.hpp"
 
 namespace bvhbench {
 namespace {

@@ -2,7 +2,7 @@
 /// What the two harness adapters of the EBP-Octree (in memory: ebp_method.cpp; out of core:
 /// ebp_cli.cpp) share: turning the library's answer into the harness's.
 #include "ebp_octree.hpp"
-#include "method.hpp"
+#include "harness/core/method.hpp"
 
 namespace bvhbench {
 

@@ -26,12 +26,12 @@
 #include <tbb/task_arena.h>
 #include <tbb/enumerable_thread_specific.h>
 
+#include "ebp_build_parts.hpp"
 #include "ebp_octree.hpp"
 #include "leaf_blocks.hpp"
 #include "polytope.hpp"
 #include "predicates.hpp"
 #include "tri_box.hpp"
-#include "ebp_build_parts.hpp"
 
 namespace ebp {
 

@@ -22,15 +22,17 @@
 #include <nlohmann/json.hpp>
 
 #include "ebp_adapter.hpp"
-#include "commands.hpp"
 #include "ebp_extbuild.hpp"
 #include "ebp_ooc.hpp"
 #include "ebp_store.hpp"
 #include "ebp_verify.hpp"
-#include "errors.hpp"
-#include "mesh.hpp"
-#include "progress.hpp"
-#include "registry.hpp"
+#include "harness/cli/commands.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/io/mesh_io.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/process_memory.hpp"
+#include "harness/util/progress.hpp"
 
 namespace bvhbench {
 
@@ -38,17 +40,6 @@ std::unique_ptr<Method> make_ebp_ooc_method(const Params& p);
 void add_ebp_store_commands(CLI::App& ebp_cmd);
 
 namespace {
-
-std::uint64_t peak_rss_bytes() {
-  std::FILE* f = std::fopen("/proc/self/status", "r");
-  if (!f) return 0;
-  char line[256];
-  std::uint64_t kb = 0;
-  while (std::fgets(line, sizeof line, f))
-    if (std::sscanf(line, "VmHWM: %lu kB", &kb) == 1) break;
-  std::fclose(f);
-  return kb * 1024;
-}
 
 // ---------------------------------------------------------------------------------------------
 // The method variant

@@ -30,7 +30,7 @@
 #include "ebp_build_parts.hpp"
 #include "ebp_io.hpp"
 #include "ebp_store.hpp"
-#include "mesh_reader.hpp"
+#include "harness/io/mesh_reader.hpp"
 #include "predicates.hpp"
 
 namespace ebp {

@@ -14,10 +14,11 @@
 
 #include "ebp_adapter.hpp"
 #include "ebp_octree.hpp"
-#include "errors.hpp"
-#include "mesh.hpp"
-#include "progress.hpp"
-#include "registry.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/io/mesh_io.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/progress.hpp"
 
 namespace bvhbench {
 std::unique_ptr<Method> make_ebp_ooc_method(const Params& p);  // ebp_cli.cpp

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry.hpp"
+#include "harness/core/geometry.hpp"
 #include "octcode.hpp"
 
 namespace ebp {

@@ -22,7 +22,7 @@
 #include <nmmintrin.h>
 #endif
 
-#include "errors.hpp"
+#include "harness/util/errors.hpp"
 
 namespace ebp {
 

@@ -18,7 +18,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "errors.hpp"
+#include "harness/util/errors.hpp"
 
 namespace ebp {
 namespace {

@@ -4,7 +4,7 @@
 /// node's planes to the support of its children's volumes and to measure tightness (volume).
 #include <vector>
 
-#include "geometry.hpp"
+#include "harness/core/geometry.hpp"
 
 namespace ebp {
 

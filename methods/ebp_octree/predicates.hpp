@@ -7,7 +7,7 @@
 /// -1 on the other side, 0 exactly on the plane. Exact for any finite doubles.
 #include <cmath>
 
-#include "geometry.hpp"
+#include "harness/core/geometry.hpp"
 
 namespace ebp {
 

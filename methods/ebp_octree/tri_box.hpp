@@ -13,7 +13,7 @@
 #include <cmath>
 #include <vector>
 
-#include "geometry.hpp"
+#include "harness/core/geometry.hpp"
 
 namespace ebp {
 

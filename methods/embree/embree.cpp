@@ -41,11 +41,12 @@
 #include <string>
 #include <vector>
 
-#include "errors.hpp"
-#include "mesh.hpp"
-#include "method_support.hpp"
-#include "registry.hpp"
-#include "system_info.hpp"
+#include "harness/core/library_versions.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/method_support.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/process_memory.hpp"
 
 namespace bvhbench {
 namespace {

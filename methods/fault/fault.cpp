@@ -8,8 +8,8 @@
 #include <thread>
 #include <vector>
 
-#include "mesh.hpp"
-#include "registry.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/registry.hpp"
 
 namespace bvhbench {
 namespace {

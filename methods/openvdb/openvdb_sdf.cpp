@@ -44,10 +44,10 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <tbb/global_control.h>
 
-#include "errors.hpp"
-#include "mesh.hpp"
-#include "registry.hpp"
-#include "system_info.hpp"
+#include "harness/core/library_versions.hpp"
+#include "harness/core/mesh.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/util/errors.hpp"
 
 namespace bvhbench {
 namespace {

@@ -1,0 +1,88 @@
+// `bvhbench methods`: what is registered, what it answers, which of its counters depend on the
+// machine, its parameters with defaults.
+#include <iomanip>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "harness/cli/commands.hpp"
+#include "harness/core/registry.hpp"
+
+namespace bvhbench {
+
+namespace {
+
+nlohmann::json method_json(const MethodInfo& m) {
+  nlohmann::json j;
+  j["name"] = m.name;
+  j["description"] = m.description;
+  j["capabilities"] = {{"inside", m.caps.inside},
+                       {"distance", m.caps.distance},
+                       {"closest_triangle", m.caps.closest_triangle},
+                       {"coherence", m.caps.coherence},
+                       {"out_of_core", m.caps.out_of_core}};
+  j["testing_only"] = m.testing_only;
+  nlohmann::json ps = nlohmann::json::array();
+  for (auto& p : m.params) {
+    nlohmann::json pj = {{"name", p.name}, {"type", to_string(p.type)}, {"default", p.default_value}, {"help", p.help}};
+    if (!p.choices.empty()) pj["choices"] = p.choices;
+    ps.push_back(pj);
+  }
+  j["params"] = ps;
+  // Counters compare gates exactly only against a baseline of the same machine fingerprint.
+  j["machine_dependent_counters"] = m.machine_dependent_counters;
+  return j;
+}
+
+}  // namespace
+
+void add_methods_command(CLI::App& app) {
+  auto as_json = std::make_shared<bool>(false);
+  auto all = std::make_shared<bool>(false);
+  auto* cmd = app.add_subcommand("methods", "List the registered methods, capabilities and parameters");
+  cmd->add_flag("--json", *as_json, "Machine-readable output");
+  cmd->add_flag("--all", *all, "Include testing-only methods (fault injection)");
+  cmd->callback([=] {
+    const Registry& reg = Registry::global();
+    if (*as_json) {
+      nlohmann::json out = nlohmann::json::array();
+      for (auto& m : reg.methods())
+        if (*all || !m.testing_only) out.push_back(method_json(m));
+      std::cout << out.dump(2) << "\n";
+      return;
+    }
+    for (auto& m : reg.methods()) {
+      if (m.testing_only && !*all) continue;
+      std::string caps;
+      auto add = [&](bool on, const char* s) { if (on) caps += (caps.empty() ? "" : ", ") + std::string(s); };
+      add(m.caps.inside, "inside");
+      add(m.caps.distance, "distance");
+      add(m.caps.closest_triangle, "closest-triangle");
+      add(m.caps.coherence, "coherence");
+      add(m.caps.out_of_core, "out-of-core");
+      std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
+                << "  " << m.description << "\n"
+                << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n";
+      std::string machine;
+      for (auto& c : m.machine_dependent_counters) machine += (machine.empty() ? "" : ", ") + c;
+      std::cout << "  machine-dependent counters: "
+                << (machine.empty() ? "none (every counter depends on the input alone)"
+                                    : machine + " (gated only against a baseline of the same machine fingerprint)")
+                << "\n";
+      if (m.params.empty()) std::cout << "  parameters: none\n";
+      for (auto& p : m.params) {
+        std::string type = to_string(p.type);
+        if (p.type == ParamType::choice) {
+          type.clear();
+          for (auto& c : p.choices) type += (type.empty() ? "" : "|") + c;
+        }
+        std::cout << "  " << std::left << std::setw(18) << p.name << std::setw(22)
+                  << ("= " + p.default_value) << "(" << type << ") " << p.help << "\n";
+      }
+      std::cout << "\n";
+    }
+  });
+}
+
+}  // namespace bvhbench

@@ -1,0 +1,70 @@
+// `bvhbench queries`: make a query set (points + sidecar) on a mesh.
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include "harness/cli/commands.hpp"
+#include "harness/core/query_set.hpp"
+#include "harness/io/mesh_io.hpp"
+#include "harness/io/query_set_io.hpp"
+#include "harness/util/errors.hpp"
+
+namespace bvhbench {
+
+// ---------------------------------------------------------------------------------------------
+// `bvhbench queries --mesh M --kind K --n N --seed S --out Q.npy [--param k=v ...]`
+// ---------------------------------------------------------------------------------------------
+void add_queries_command(CLI::App& app) {
+  struct Opts {
+    std::string mesh, kind = "random", out;
+    std::size_t n = 100000;
+    std::uint64_t seed = 1;
+    std::vector<std::string> params;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* cmd = app.add_subcommand("queries", "Generate a query set (NAME.npy + NAME.json)");
+  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
+  cmd->add_option("--kind", o->kind, "Query kind: random, near, haptic, surface ...");
+  cmd->add_option("--n", o->n, "Number of points")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", o->seed, "Random seed");
+  cmd->add_option("--param", o->params, "Generator parameter key=value (repeatable)");
+  cmd->add_option("--out", o->out, "Output .npy (its .json sidecar is written beside it)")->required();
+  cmd->callback([o] {
+    std::map<std::string, double> given;
+    for (auto& kv : o->params) {
+      auto eq = kv.find('=');
+      if (eq == std::string::npos) throw InputError("--param '" + kv + "': expected key=value");
+      char* end = nullptr;
+      std::string v = kv.substr(eq + 1);
+      double d = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end) throw InputError("--param '" + kv + "': value is not a number");
+      given[kv.substr(0, eq)] = d;
+    }
+    if (o->out.size() < 4 || o->out.compare(o->out.size() - 4, 4, ".npy") != 0)
+      throw InputError("--out " + o->out + ": must end in .npy");
+    // The output folder is checked before the (possibly long) generation: a missing or
+    // unwritable folder is bad usage (exit 2), not a failure found minutes later.
+    const std::filesystem::path dir = std::filesystem::path(o->out).parent_path().empty()
+                                          ? std::filesystem::path(".")
+                                          : std::filesystem::path(o->out).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+      throw InputError("--out " + o->out + ": folder " + dir.string() + " does not exist");
+    if (::access(dir.c_str(), W_OK) != 0)
+      throw InputError("--out " + o->out + ": folder " + dir.string() + " is not writable");
+    Mesh mesh = load_mesh(o->mesh);
+    nlohmann::json meta;
+    auto pts = generate_queries(mesh, o->kind, o->n, o->seed, given, &meta);
+    try {
+      write_query_set(o->out, pts, meta);
+    } catch (const std::runtime_error& e) {
+      throw InputError(e.what());  // names the file and the reason (e.g. no space left)
+    }
+  });
+}
+
+}  // namespace bvhbench

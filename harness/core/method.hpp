@@ -1,0 +1,101 @@
+#pragma once
+/// The method interface: the one seam between the harness and a spatial query structure.
+///
+/// Lifecycle (driven by run_job.cpp):
+///   1. the registry creates the method from validated Params;
+///   2. build(mesh, ctx) once; the harness times it and then *releases the mesh*, so a method
+///      keeps its own copy of what queries need (and its structure_bytes() says how much);
+///   3. for each replay pass: reset_path(), then inside(p) or distance(p) for every query,
+///      in the query set's order (haptic paths are sequences; coherent methods may carry state
+///      from one query to the next, declared as a parameter);
+///   4. counters() are read after the counted pass, structure_bytes() after build.
+/// Virtual calls happen here, once per query, never per primitive.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "harness/core/geometry.hpp"
+#include "harness/core/params.hpp"
+
+namespace bvhbench {
+
+struct Mesh;
+class Progress;
+
+enum class QueryType { inside, distance };
+const char* to_string(QueryType q);
+QueryType parse_query_type(const std::string& s);  ///< "inside" | "distance"; InputError otherwise
+
+/// Answer to a distance query at p.
+struct DistanceResult {
+  double distance = 0;   ///< signed: negative inside the solid
+  Vec3d closest;         ///< closest point on the surface
+  Vec3d normal;          ///< unit outward normal of the closest triangle (the contact normal)
+  std::int64_t triangle = -1;  ///< index of the closest triangle in the input mesh, -1 if unknown
+};
+
+struct Capabilities {
+  bool inside = false;
+  bool distance = false;
+  bool closest_triangle = false;  ///< distance() fills `triangle`
+  bool coherence = false;         ///< has a coherent (path-state) variant as a parameter
+  bool out_of_core = false;
+};
+
+/// A named work counter, summed over the queries since reset_counters().
+struct Counter {
+  std::string name;   ///< snake_case, e.g. "nodes_visited", "triangles_tested"
+  std::uint64_t value = 0;
+};
+
+/// What build() may use besides the mesh.
+struct BuildContext {
+  int threads = 1;                       ///< job's thread budget (1 = single thread)
+  QueryType query_type = QueryType::inside;  ///< what will be asked: build only what it needs
+  Box3d query_bounds;                    ///< box of the query points (to size bands, caches)
+  std::string query_kind;                ///< "random", "haptic", ... (informative)
+  std::string tmp_dir;                   ///< for out-of-core builds
+  std::size_t memory_budget_bytes = 0;   ///< 0 = no budget given
+  Progress* progress = nullptr;          ///< optional; methods may create their own
+};
+
+class Method {
+ public:
+  virtual ~Method() = default;
+
+  /// Builds the structure. May throw InputError (input it refuses), UnsupportedError, or
+  /// anything else (becomes status `error`).
+  virtual void build(const Mesh& mesh, const BuildContext& ctx) = 0;
+
+  /// Point-in-solid. Default: unsupported.
+  virtual bool inside(const Vec3d& p);
+  /// Signed distance, closest point, contact normal, closest triangle. Default: unsupported.
+  virtual DistanceResult distance(const Vec3d& p);
+
+  /// Whether this instance (with its parameters) answers q. Defaults to the registered caps.
+  virtual bool supports(QueryType q) const = 0;
+
+  /// Forgets state carried between consecutive queries (called before each replay pass).
+  virtual void reset_path() {}
+
+  /// Bytes of the method's own structure, including its copy of the geometry.
+  virtual std::size_t structure_bytes() const = 0;
+
+  /// Work counters since the last reset_counters() (totals, not means).
+  virtual std::vector<Counter> counters() const { return {}; }
+  virtual void reset_counters() {}
+
+  /// Facts about the built structure worth recording (levels, node counts, ...).
+  virtual nlohmann::json info() const { return nlohmann::json::object(); }
+
+  /// What a library this method calls chose on this machine that its machine-dependent counters
+  /// (MethodInfo::machine_dependent_counters) depend on, as far as the library tells (e.g.
+  /// Embree's native SIMD widths). Read after the counted pass; it becomes part of the result's
+  /// machine fingerprint. Default: nothing to add.
+  virtual nlohmann::json machine_facts() const { return nlohmann::json::object(); }
+};
+
+}  // namespace bvhbench

@@ -1,0 +1,84 @@
+#pragma once
+/// Internals of the query kinds (query_kinds*.cpp), exposed for their tests: the generators,
+/// the surface sampler, the triangle grid used for closest points, and the haptic path layout.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "harness/core/geometry.hpp"
+#include "harness/core/mesh.hpp"
+
+namespace bvhbench::query_kinds_detail {
+
+using Params = std::map<std::string, double>;
+
+std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
+std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
+std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
+std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
+
+/// Area-weighted triangle picking: a prefix sum of triangle areas (#F doubles), searched by
+/// bisection. Zero-area triangles are never picked.
+class AreaSampler {
+ public:
+  /// Throws InputError if the mesh has no area at all.
+  explicit AreaSampler(const Mesh& mesh);
+  /// A triangle with probability proportional to its area, from u in [0, 1).
+  std::uint32_t pick(double u) const;
+  double total_area() const { return cdf_.empty() ? 0.0 : cdf_.back(); }
+ private:
+  std::vector<double> cdf_;
+};
+
+/// A point uniform on triangle (a, b, c) from two uniforms in [0, 1).
+Vec3d uniform_in_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c, double r1, double r2);
+
+/// Exact closest-point queries for points near the surface: a dense uniform grid over the
+/// mesh's box, each triangle listed in every cell its box overlaps (CSR: #cells+1 offsets, then
+/// triangle ids). A query is given an upper bound r on the distance (in a haptic loop the
+/// previous closest point gives it) and tests the triangles of the cells overlapping the box
+/// p +- r, so the answer is exact whenever some surface point lies within r. The cell size is
+/// at least `min_cell` and twice the average edge length, grown until the grid has at most
+/// `max_cells` cells.
+class TriangleGrid {
+ public:
+  TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_cells = std::size_t(1) << 26);
+  struct Hit {
+    Vec3d point;            ///< closest point on the mesh
+    std::uint32_t triangle; ///< its triangle
+    double distance;        ///< |p - point|
+  };
+  /// Closest point to p among the triangles within distance r (r must be > 0 and at least the
+  /// true distance for an exact answer; a larger r only costs time). found=false if none.
+  bool closest(const Vec3d& p, double r, Hit* hit) const;
+  double cell_size() const { return h_; }
+  std::size_t num_cells() const { return std::size_t(n_[0]) * n_[1] * n_[2]; }
+  std::size_t num_refs() const { return ids_.size(); }
+  std::uint64_t triangles_tested() const { return tested_; }
+
+ private:
+  const Mesh& mesh_;
+  Vec3d lo_;
+  double h_ = 1;
+  int n_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> offsets_;  // #cells + 1
+  std::vector<std::uint32_t> ids_;
+  mutable std::uint64_t tested_ = 0;
+  int cell_coord(double x, int axis) const;
+};
+
+/// The fixed layout of a haptic path: every episode has `approach` samples coming in from free
+/// space, `contact` samples in the contact band, and `leave` samples going away. Episode e
+/// covers samples [e * total(), (e + 1) * total()); the last one may be cut short by n.
+struct HapticLayout {
+  std::size_t approach = 0, contact = 0, leave = 0;
+  std::size_t total() const { return approach + contact + leave; }
+  double units_per_metre = 1;  ///< mesh units per metre (bbox diagonal / model_size_m)
+  double max_step = 0;         ///< largest allowed step between samples, mesh units
+  double band = 0;             ///< contact band half-width, mesh units
+  double approach_distance = 0;  ///< start distance from the surface, mesh units
+};
+HapticLayout haptic_layout(const Mesh& mesh, const Params& p);
+
+}  // namespace bvhbench::query_kinds_detail

@@ -1,0 +1,327 @@
+// The `haptic` query kind: a simulated 1 kHz haptic probe (the workload the EBP-Octree paper
+// targets), and the triangle grid it uses to follow the surface.
+//
+// The path is a sequence of contact episodes of fixed length (haptic_layout). In each:
+//  - approach: from free space (approach_mm off the surface, behind the first contact point)
+//    along a smooth curve whose velocity ends equal to the sliding velocity;
+//  - contact: the probe slides over the surface like a haptic proxy. Each sample moves the
+//    probe along its heading in the tangent plane, projects the predicted position onto the
+//    mesh (exact closest point, from the grid) and puts the probe at a signed offset along the
+//    outward direction of that closest point. The offset varies smoothly inside the contact
+//    band (+-band_mm: slightly outside, slightly penetrating); the heading turns smoothly (an
+//    Ornstein-Uhlenbeck angular velocity) and the speed varies below slide_speed. A step is
+//    never longer than max_speed / rate_hz (where the closest point jumps, across a concave
+//    crease or a thin part, the probe is held to that step and catches up);
+//  - leave: away along the last outward direction, velocity continuous, back to free space.
+// Scale: the mesh's bounding-box diagonal is taken as model_size_m metres (30 cm by default),
+// so a hand at 0.5 m/s moves at most 0.5 / 0.3 / 1000 = 0.17% of the diagonal per sample.
+//
+// Closest points: a dense uniform grid of triangle ids built once (cells at least as large as
+// the contact band). Each contact sample has a distance bound for free (the previous closest
+// point is on the surface), so it only tests the triangles of the few cells overlapping the
+// box p +- bound. Exact, and at 30M triangles ~ a few hundred triangle tests per sample.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "harness/core/correctly_rounded.hpp"
+#include "harness/core/query_kinds_detail.hpp"
+#include "harness/core/query_set.hpp"
+#include "harness/core/rng.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/progress.hpp"
+
+namespace bvhbench::query_kinds_detail {
+
+namespace {
+constexpr double kTwoPi = 6.283185307179586476925;
+double smoothstep(double x) { return x * x * (3 - 2 * x); }
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// TriangleGrid
+// ---------------------------------------------------------------------------------------------
+
+int TriangleGrid::cell_coord(double x, int axis) const {
+  const double c = std::floor((x - lo_[axis]) / h_);
+  if (!(c > 0)) return 0;  // also NaN
+  if (c >= n_[axis] - 1) return n_[axis] - 1;
+  return int(c);
+}
+
+TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_cells) : mesh_(mesh) {
+  Box3d box = mesh.bounds();
+  if (box.empty() || mesh.num_triangles() == 0)
+    throw InputError(mesh.path + ": cannot build a grid over an empty mesh");
+  const double diag = box.diagonal();
+  const double pad = diag > 0 ? diag * 1e-9 : 1e-9;
+  box.lo -= Vec3d(pad, pad, pad);
+  box.hi += Vec3d(pad, pad, pad);
+  lo_ = box.lo;
+  const Vec3d ext = box.extent();
+  h_ = std::max({min_cell, 2 * mesh.average_edge_length(), diag * 1e-6, 1e-300});
+  for (;;) {
+    std::size_t cells = 1;
+    for (int i = 0; i < 3; ++i) {
+      n_[i] = std::max(1, int(std::min(std::ceil(ext[i] / h_), 1e9)));
+      cells *= std::size_t(n_[i]);
+    }
+    if (cells <= max_cells) break;
+    h_ *= 1.25;
+  }
+  // Cell coordinates of every vertex once (a sequential pass), so that the two passes over the
+  // triangles gather 12 bytes per corner and most triangles (smaller than a cell) take the
+  // single-cell path, remembered between the passes.
+  const std::size_t nv = mesh.vertices.size();
+  std::vector<std::array<int, 3>> vcell(nv);
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int i = 0; i < 3; ++i) vcell[v][i] = cell_coord(mesh.vertices[v][i], i);
+  auto cell_range = [&](std::uint32_t t, int lo[3], int hi[3]) {
+    const auto& tri = mesh.triangles[t];
+    const auto &a = vcell[tri[0]], &b = vcell[tri[1]], &c = vcell[tri[2]];
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::min({a[i], b[i], c[i]});
+      hi[i] = std::max({a[i], b[i], c[i]});
+    }
+  };
+  auto linear = [&](int x, int y, int z) { return (std::size_t(z) * n_[1] + y) * n_[0] + x; };
+  constexpr std::uint32_t kMulti = ~std::uint32_t(0);
+  const std::size_t cells = num_cells();
+  offsets_.assign(cells + 1, 0);
+  const auto nt = std::uint32_t(mesh.num_triangles());
+  std::vector<std::uint32_t> single(nt);
+  std::uint64_t refs = 0;
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    int lo[3], hi[3];
+    cell_range(t, lo, hi);
+    if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
+      const std::size_t c = linear(lo[0], lo[1], lo[2]);
+      single[t] = std::uint32_t(c);
+      ++offsets_[c];
+      ++refs;
+      continue;
+    }
+    single[t] = kMulti;
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) ++offsets_[linear(x, y, z)];
+    refs += std::uint64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+  }
+  if (refs >= 0xffffffffull) throw InputError(mesh.path + ": too many triangle-cell pairs for the grid");
+  // offsets_[c] becomes the end of cell c; filling backwards leaves it at the start, with the
+  // ids of each cell in increasing order.
+  std::uint32_t sum = 0;
+  for (std::size_t c = 0; c < cells; ++c) { sum += offsets_[c]; offsets_[c] = sum; }
+  offsets_[cells] = sum;
+  ids_.resize(sum);
+  for (std::uint32_t t = nt; t-- > 0;) {
+    if (single[t] != kMulti) {
+      ids_[--offsets_[single[t]]] = t;
+      continue;
+    }
+    int lo[3], hi[3];
+    cell_range(t, lo, hi);
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) ids_[--offsets_[linear(x, y, z)]] = t;
+  }
+}
+
+bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
+  int lo[3], hi[3], home[3];
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = cell_coord(p[i] - r, i);
+    hi[i] = cell_coord(p[i] + r, i);
+    home[i] = cell_coord(p[i], i);
+  }
+  double best2 = std::numeric_limits<double>::infinity();
+  bool found = false;
+  auto scan = [&](int x, int y, int z) {
+    const std::size_t c = (std::size_t(z) * n_[1] + y) * n_[0] + x;
+    for (std::uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) {
+      const std::uint32_t t = ids_[k];
+      const auto& tri = mesh_.triangles[t];
+      const Vec3d &a = mesh_.vertices[tri[0]], &b = mesh_.vertices[tri[1]], &cc = mesh_.vertices[tri[2]];
+      // The triangle's box first: most triangles of a visited cell are farther than the best.
+      double box2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        const double mn = std::min({a[i], b[i], cc[i]}), mx = std::max({a[i], b[i], cc[i]});
+        const double d = std::max({mn - p[i], 0.0, p[i] - mx});
+        box2 += d * d;
+      }
+      if (box2 > best2) continue;
+      const Vec3d q = closest_point_on_triangle(p, a, b, cc);
+      const double d2 = squared_norm(q - p);
+      ++tested_;
+      // Ties go to the lower triangle id, so the answer does not depend on visit order.
+      if (d2 < best2 || (d2 == best2 && t < hit->triangle)) {
+        best2 = d2;
+        hit->point = q;
+        hit->triangle = t;
+        found = true;
+      }
+    }
+  };
+  // The cell holding p first (it usually holds the answer), then the others that can still
+  // hold something closer than the best so far.
+  const bool home_in_box = home[0] >= lo[0] && home[0] <= hi[0] && home[1] >= lo[1] &&
+                           home[1] <= hi[1] && home[2] >= lo[2] && home[2] <= hi[2];
+  if (home_in_box) scan(home[0], home[1], home[2]);
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        if (home_in_box && x == home[0] && y == home[1] && z == home[2]) continue;
+        const int xyz[3] = {x, y, z};
+        double cell2 = 0;
+        for (int i = 0; i < 3; ++i) {
+          const double clo = lo_[i] + h_ * xyz[i], chi = clo + h_;
+          // Border cells extend to infinity (cell_coord clamps), so never cull them by box.
+          const double d = std::max({(xyz[i] > 0 ? clo : -1e300) - p[i], 0.0,
+                                     p[i] - (xyz[i] < n_[i] - 1 ? chi : 1e300)});
+          cell2 += d * d;
+        }
+        if (cell2 > best2) continue;
+        scan(x, y, z);
+      }
+  if (found) hit->distance = std::sqrt(best2);
+  return found;
+}
+
+// ---------------------------------------------------------------------------------------------
+// the haptic path
+// ---------------------------------------------------------------------------------------------
+
+HapticLayout haptic_layout(const Mesh& mesh, const Params& p) {
+  auto get = [&](const char* key) {
+    const double v = p.at(key);
+    if (!(v > 0) || !std::isfinite(v))
+      throw InputError(std::string("query kind 'haptic': parameter ") + key + " must be > 0");
+    return v;
+  };
+  const double model = get("model_size_m"), rate = get("rate_hz"), vmax = get("max_speed");
+  const double slide = get("slide_speed"), vapp = get("approach_speed");
+  const double d0_mm = get("approach_mm"), band_mm = get("band_mm"), contact_ms = get("contact_ms");
+  if (!(p.at("turn_rate") >= 0)) throw InputError("query kind 'haptic': turn_rate must be >= 0");
+  if (slide + vapp > vmax)
+    throw InputError("query kind 'haptic': slide_speed + approach_speed must not exceed max_speed");
+  const double diag = mesh.bounds().diagonal();
+  if (!(diag > 0) || !std::isfinite(diag))
+    throw InputError(mesh.path + ": the mesh has no extent to move a probe over");
+  HapticLayout L;
+  L.units_per_metre = diag / model;
+  L.max_step = vmax / rate * L.units_per_metre;
+  L.band = band_mm * 1e-3 * L.units_per_metre;
+  L.approach_distance = d0_mm * 1e-3 * L.units_per_metre;
+  // Smoothstep's peak rate is 1.5 / T: T = 1.5 d0 / approach_speed keeps the normal speed
+  // below approach_speed.
+  const double t_app = 1.5 * d0_mm * 1e-3 / vapp;
+  L.approach = L.leave = std::max<std::size_t>(1, std::size_t(std::ceil(t_app * rate)));
+  L.contact = std::max<std::size_t>(2, std::size_t(std::llround(contact_ms * 1e-3 * rate)));
+  return L;
+}
+
+std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed,
+                               const Params& params) {
+  const HapticLayout L = haptic_layout(mesh, params);
+  const double rate = params.at("rate_hz"), dt = 1.0 / rate;
+  const double slide = params.at("slide_speed") * L.units_per_metre;  // units / s
+  const double turn_rate = params.at("turn_rate");
+  const double tau = 0.3;  // s, correlation time of the heading's angular velocity
+  AreaSampler sampler(mesh);
+  Progress progress_grid("haptic: triangle grid", 1, mesh.num_triangles() >= 2000000);
+  const TriangleGrid grid(mesh, L.band);
+  progress_grid.finish();
+  Progress progress("haptic path", double(n), n >= 200000);
+  Rng rng(seed);
+  std::vector<Vec3d> out;
+  out.reserve(n);
+  const double T = double(L.approach) * dt;  // approach and leave duration
+  const double tiny = mesh.bounds().diagonal() * 1e-12;
+
+  while (out.size() < n) {
+    // First contact: an area-weighted surface point, outward along its face normal.
+    const std::uint32_t t0 = sampler.pick(rng.uniform());
+    const Vec3d a = mesh.vertex(t0, 0), b = mesh.vertex(t0, 1), c = mesh.vertex(t0, 2);
+    const double r1 = rng.uniform(), r2 = rng.uniform();
+    Vec3d surf = uniform_in_triangle(a, b, c, r1, r2);
+    Vec3d nrm = triangle_normal(a, b, c);
+    // Heading: a random direction in the tangent plane.
+    Vec3d dir;
+    do {
+      dir = Vec3d(rng.normal(), rng.normal(), rng.normal());
+      dir -= nrm * dot(dir, nrm);
+    } while (!(norm(dir) > 1e-6));
+    dir = normalized(dir);
+    // Smooth speed and band offset for this episode.
+    const double fs = rng.uniform(0.2, 0.8), ps = rng.uniform(0, kTwoPi);
+    const double f1 = rng.uniform(0.3, 1.0), p1 = rng.uniform(0, kTwoPi);
+    const double f2 = rng.uniform(1.5, 4.0), p2 = rng.uniform(0, kTwoPi);
+    // Correctly rounded sin/cos: the path is the same bytes on every machine (correctly_rounded.hpp).
+    auto speed_at = [&](double t) { return slide * (0.6 + 0.4 * correctly_rounded::sin(kTwoPi * fs * t + ps)); };
+    auto offset_at = [&](double t) {
+      return L.band * 0.9 * (0.6 * correctly_rounded::sin(kTwoPi * f1 * t + p1) + 0.4 * correctly_rounded::sin(kTwoPi * f2 * t + p2));
+    };
+    Vec3d probe = surf + nrm * offset_at(0);
+    const Vec3d vel0 = dir * speed_at(0);
+
+    // Approach: tau runs from T down to dt; at tau = 0 the probe is at the first contact.
+    for (std::size_t k = 0; k < L.approach && out.size() < n; ++k) {
+      const double tau_k = double(L.approach - k) * dt;
+      out.push_back(probe - vel0 * (tau_k - tau_k * tau_k / (2 * T)) +
+                    nrm * (L.approach_distance * smoothstep(tau_k / T)));
+    }
+
+    // Contact: slide, following the surface.
+    double omega = 0;
+    Vec3d vel = vel0;
+    for (std::size_t k = 0; k < L.contact && out.size() < n; ++k) {
+      if (k > 0) {
+        const double t = double(k) * dt;
+        omega += -omega * dt / tau + turn_rate * std::sqrt(2 * dt / tau) * rng.normal();
+        const double ang = omega * dt;
+        dir = dir * correctly_rounded::cos(ang) + cross(nrm, dir) * correctly_rounded::sin(ang);
+        Vec3d tangent = dir - nrm * dot(dir, nrm);
+        if (norm(tangent) > 1e-9) dir = normalized(tangent);
+        vel = dir * speed_at(t);
+        const Vec3d pred = probe + vel * dt;
+        TriangleGrid::Hit hit{};
+        hit.triangle = ~std::uint32_t(0);
+        // The previous closest point is on the surface: the distance is at most r.
+        const double r = norm(pred - surf) * (1 + 1e-9) + tiny;
+        if (grid.closest(pred, r, &hit)) {
+          const Vec3d u = pred - hit.point;
+          const double d = norm(u);
+          const Vec3d nf = triangle_normal(mesh.vertex(hit.triangle, 0), mesh.vertex(hit.triangle, 1),
+                                           mesh.vertex(hit.triangle, 2));
+          if (d > L.band * 1e-6) {
+            nrm = u / d * (dot(u, nf) >= 0 ? 1.0 : -1.0);
+          } else if (norm(nf) > 0) {
+            nrm = nf;
+          }
+          surf = hit.point;
+        }
+        Vec3d next = surf + nrm * offset_at(t);
+        const Vec3d step = next - probe;
+        const double len = norm(step);
+        if (len > L.max_step) next = probe + step * (L.max_step / len);
+        probe = next;
+      }
+      out.push_back(probe);
+    }
+
+    // Leave: velocity continuous, out along the last outward direction.
+    const Vec3d start = probe;
+    for (std::size_t k = 1; k <= L.leave && out.size() < n; ++k) {
+      const double t = double(k) * dt;
+      out.push_back(start + vel * (t - t * t / (2 * T)) + nrm * (L.approach_distance * smoothstep(t / T)));
+    }
+    progress.update(double(out.size()));
+  }
+  progress.finish();
+  return out;
+}
+
+}  // namespace bvhbench::query_kinds_detail

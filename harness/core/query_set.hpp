@@ -1,0 +1,56 @@
+#pragma once
+/// Query sets (ARCHITECTURE.md, "Query sets"): NAME.npy (float64, N x 3) plus NAME.json with at
+/// least kind, n, seed, mesh_sha256 and the generator's parameters. Generation is deterministic:
+/// the same mesh, kind, n, seed and parameters give the same bytes on any machine.
+///
+/// Points made elsewhere are query sets too: a bare NAME.npy (float64 or float32, N x 3, either
+/// byte order, C or Fortran order) or a text file NAME.xyz / NAME.csv (points_text.hpp), without a
+/// sidecar, is a set of kind `file`, identified by the sha256 of its bytes and replayed in the
+/// file's order. A NAME.json beside any of them is its sidecar and is checked.
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "harness/core/geometry.hpp"
+
+namespace bvhbench {
+
+struct Mesh;
+
+struct QuerySet {
+  std::string path;         ///< the .npy, .xyz or .csv
+  std::string sha256;       ///< of the file's bytes
+  nlohmann::json meta;      ///< the sidecar; without one {kind: file, n, format, ordered: true}
+  std::vector<Vec3d> points;
+  std::string kind() const { return meta.value("kind", std::string("unknown")); }
+  Box3d bounds() const;
+};
+
+/// A kind of query set. Registered in query_kinds.cpp (one line each).
+struct QueryKind {
+  std::string name;
+  std::string description;
+  /// Parameters with defaults (all recorded in the sidecar); user values override by key.
+  std::map<std::string, double> defaults;
+  /// Generates n points on `mesh` from `seed` with the resolved parameters.
+  std::function<std::vector<Vec3d>(const Mesh& mesh, std::size_t n, std::uint64_t seed,
+                                   const std::map<std::string, double>& params)>
+      generate;
+  bool ordered = false;  ///< a path whose order matters (haptic)
+};
+
+const std::vector<QueryKind>& query_kinds();
+const QueryKind* find_query_kind(const std::string& name);
+
+/// Generates a query set and its sidecar meta (kind, n, seed, mesh_sha256, mesh path, params,
+/// ordered). Throws InputError for an unknown kind or parameter.
+std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed,
+                                    const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta);
+
+}  // namespace bvhbench

@@ -1,0 +1,120 @@
+// Loading a Mesh through the one mesh reader (mesh_reader.hpp; the formats are parsed in
+// mesh_ply.cpp, mesh_obj.cpp, ...), and a PLY writer.
+#include "harness/io/mesh_io.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bvhbench {
+
+namespace {
+constexpr std::size_t kChunk = std::size_t(8) << 20;
+constexpr bool kBigEndianHost = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
+}  // namespace
+
+Mesh read_mesh(MeshReader& reader) {
+  Mesh mesh;
+  mesh.path = reader.name();
+  // The hints are bounded by the file's size (checked by the parser), so reserving them is safe.
+  mesh.vertices.reserve(std::size_t(reader.num_vertices()));
+  reader.read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+    mesh.vertices.insert(mesh.vertices.end(), v, v + n);
+  });
+  mesh.triangles.reserve(std::size_t(reader.num_triangles()));
+  reader.read_triangles([&](std::uint64_t, const Triangle* t, std::size_t n) {
+    mesh.triangles.insert(mesh.triangles.end(), t, t + n);
+  });
+  mesh.sha256 = reader.sha256();
+  mesh.file = reader.info();
+  return mesh;
+}
+
+Mesh load_mesh(const std::string& path, Progress* progress) {
+  auto reader = MeshReader::open(path, progress);
+  return read_mesh(*reader);
+}
+
+Mesh load_mesh_bytes(std::string_view data, const std::string& name, const std::string& format) {
+  auto reader = MeshReader::open_bytes(data, name, format);
+  return read_mesh(*reader);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writer.
+// ---------------------------------------------------------------------------------------------
+void write_ply(const std::string& path, const Mesh& mesh, bool ascii) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
+  std::string buf;
+  buf.reserve(kChunk + 256);
+  bool ok = true;
+  auto flush = [&](bool force) {
+    if (buf.size() >= kChunk || (force && !buf.empty())) {
+      ok = ok && std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
+      buf.clear();
+    }
+  };
+  buf += "ply\nformat ";
+  buf += ascii ? "ascii" : "binary_little_endian";
+  buf += " 1.0\ncomment written by bvhbench\nelement vertex " + std::to_string(mesh.vertices.size()) +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+         std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  char tmpc[64];
+  for (const Vec3d& v : mesh.vertices) {
+    const float c[3] = {float(v.x), float(v.y), float(v.z)};
+    if (ascii) {
+      for (int k = 0; k < 3; ++k) {
+        auto r = std::to_chars(tmpc, tmpc + sizeof tmpc, c[k]);
+        buf.append(tmpc, r.ptr);
+        buf += k < 2 ? ' ' : '\n';
+      }
+    } else {
+      char b[12];
+      for (int k = 0; k < 3; ++k) {
+        std::uint32_t u;
+        std::memcpy(&u, &c[k], 4);
+        if (kBigEndianHost) u = __builtin_bswap32(u);
+        std::memcpy(b + 4 * k, &u, 4);
+      }
+      buf.append(b, 12);
+    }
+    flush(false);
+  }
+  for (const auto& t : mesh.triangles) {
+    if (ascii) {
+      buf += "3";
+      for (int k = 0; k < 3; ++k) {
+        buf += ' ';
+        auto r = std::to_chars(tmpc, tmpc + sizeof tmpc, t[k]);
+        buf.append(tmpc, r.ptr);
+      }
+      buf += '\n';
+    } else {
+      char b[13];
+      b[0] = 3;
+      for (int k = 0; k < 3; ++k) {
+        std::uint32_t u = t[k];
+        if (kBigEndianHost) u = __builtin_bswap32(u);
+        std::memcpy(b + 1 + 4 * k, &u, 4);
+      }
+      buf.append(b, 13);
+    }
+    flush(false);
+  }
+  flush(true);
+  ok = (std::fclose(f) == 0) && ok;
+  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot write: " + why);
+  }
+}
+
+}  // namespace bvhbench

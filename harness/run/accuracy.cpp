@@ -1,0 +1,206 @@
+#include "harness/run/accuracy.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "harness/io/npz.hpp"
+#include "harness/util/errors.hpp"
+
+namespace bvhbench {
+
+using json = nlohmann::json;
+
+void Answers::resize(QueryType t, std::size_t n) {
+  type = t;
+  if (t == QueryType::inside) {
+    inside.assign(n, 0);
+  } else {
+    distance.assign(n, 0.0);
+    closest.assign(n, Vec3d{});
+    normal.assign(n, Vec3d{});
+    triangle.assign(n, -1);
+  }
+}
+
+void Answers::write_npz(const std::string& path) const {
+  std::map<std::string, NpyArray> a;
+  if (type == QueryType::inside) {
+    a["inside"] = NpyArray::b1(inside);
+  } else {
+    a["distance"] = NpyArray::f8(distance);
+    a["closest"] = NpyArray::f8_n3(closest);
+    a["normal"] = NpyArray::f8_n3(normal);
+    a["triangle"] = NpyArray::i8(triangle);
+  }
+  bvhbench::write_npz(path, a);
+}
+
+namespace {
+
+/// max / p99 / mean of finite values (null when there are none).
+json error_stats(std::vector<double> v) {
+  if (v.empty()) return {{"max", nullptr}, {"p99", nullptr}, {"mean", nullptr}};
+  double sum = 0;
+  for (double x : v) sum += x;
+  std::sort(v.begin(), v.end());
+  std::size_t i99 = std::min(v.size() - 1, std::size_t(std::ceil(0.99 * double(v.size()))) - 1);
+  return {{"max", v.back()}, {"p99", v[i99]}, {"mean", sum / double(v.size())}};
+}
+
+const NpyArray& need(const std::map<std::string, NpyArray>& t, const std::string& path,
+                     const std::string& key, const std::string& dtype, std::size_t n,
+                     std::size_t cols) {
+  auto it = t.find(key);
+  if (it == t.end()) throw file_error(path, "oracle has no '" + key + "' array (is it a bvhbench truth file?)");
+  const NpyArray& a = it->second;
+  if (a.dtype != dtype) throw file_error(path, "oracle '" + key + "' has dtype " + a.dtype + ", expected " + dtype);
+  std::size_t want = n * cols;
+  if (a.size() != want)
+    throw file_error(path, "oracle '" + key + "' has " + std::to_string(a.size()) + " values, expected " +
+                               std::to_string(want) + " (does it belong to this query set?)");
+  return a;
+}
+
+/// A NumPy unicode array's first string; "" if absent or not unicode.
+std::string unicode_string(const std::map<std::string, NpyArray>& t, const std::string& key) {
+  auto d = t.find(key);
+  return d == t.end() ? std::string() : d->second.unicode_value(0);
+}
+
+bool finite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+json compute_accuracy(const Answers& ans, const std::string& truth_path, double diagonal,
+                      const std::string& queries_sha256, const std::string& mesh_sha256) {
+  auto t = read_npz(truth_path);
+  const std::string truth_qsha = unicode_string(t, "queries_sha256");
+  if (!queries_sha256.empty() && !truth_qsha.empty() && truth_qsha != queries_sha256)
+    throw file_error(truth_path, "oracle was computed for another query set (queries_sha256 " +
+                                     truth_qsha.substr(0, 16) + "..., this query set is " +
+                                     queries_sha256.substr(0, 16) + "...); recompute it with bvhbench truth");
+  const std::string truth_msha = unicode_string(t, "mesh_sha256");
+  if (!mesh_sha256.empty() && !truth_msha.empty() && truth_msha != mesh_sha256)
+    throw file_error(truth_path, "oracle was computed for another mesh (mesh_sha256 " + truth_msha.substr(0, 16) +
+                                     "..., this mesh is " + mesh_sha256.substr(0, 16) +
+                                     "...); recompute it with bvhbench truth");
+
+  const std::size_t n = ans.type == QueryType::inside ? ans.inside.size() : ans.distance.size();
+  const double near_thr = 1e-6 * diagonal;
+  json acc;
+  acc["truth"] = truth_path;
+  acc["near_surface_threshold"] = near_thr;
+  std::string definition = unicode_string(t, "definition");
+  acc["definition"] = definition.empty() ? "unknown" : definition;
+
+  const double* td = need(t, truth_path, "distance", "<f8", n, 1).as<double>();
+  const std::uint8_t* ti = need(t, truth_path, "inside", "|b1", n, 1).as<std::uint8_t>();
+  const double* tw = t.count("winding") ? need(t, truth_path, "winding", "<f8", n, 1).as<double>() : nullptr;
+  std::size_t near = 0;
+  for (std::size_t i = 0; i < n; ++i) near += std::abs(td[i]) < near_thr;
+  acc["near_surface"] = near;
+
+  if (ans.type == QueryType::inside) {
+    // On an open mesh, points whose winding number is far from both 0 and 1 are ambiguous: the
+    // threshold at 1/2 decides them, and a method may reasonably decide otherwise.
+    const bool open = definition == "winding_number";
+    std::size_t wrong = 0, wrong_near = 0, ambiguous = 0, wrong_ambiguous = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool is_near = std::abs(td[i]) < near_thr;
+      const bool amb = open && tw && std::abs(std::abs(tw[i]) - 0.5) < 0.25;
+      const bool bad = (ans.inside[i] != 0) != (ti[i] != 0);
+      ambiguous += amb;
+      wrong += bad;
+      wrong_near += bad && is_near;
+      wrong_ambiguous += bad && amb;
+    }
+    const std::size_t n_far = n - near;
+    acc["inside"] = {{"wrong", wrong},
+                     {"rate", n ? double(wrong) / double(n) : 0.0},
+                     {"near_surface", near},
+                     {"wrong_near_surface", wrong_near},
+                     {"wrong_far", wrong - wrong_near},
+                     {"n_far", n_far},
+                     {"rate_far", n_far ? double(wrong - wrong_near) / double(n_far) : 0.0},
+                     {"ambiguous", ambiguous},
+                     {"wrong_ambiguous", wrong_ambiguous}};
+    acc["distance"] = nullptr;
+    return acc;
+  }
+
+  const std::int64_t* tt = need(t, truth_path, "triangle", "<i8", n, 1).as<std::int64_t>();
+  const std::int64_t* ties = t.count("tie_count") ? need(t, truth_path, "tie_count", "<i8", n, 1).as<std::int64_t>() : nullptr;
+  std::size_t max_tied = 0;
+  const std::int64_t* tied = nullptr;
+  if (t.count("tied_triangles") && t.at("tied_triangles").shape.size() == 2) {
+    max_tied = t.at("tied_triangles").shape[1];
+    tied = need(t, truth_path, "tied_triangles", "<i8", n, max_tied).as<std::int64_t>();
+  }
+  const double* tc = t.count("closest") ? need(t, truth_path, "closest", "<f8", n, 3).as<double>() : nullptr;
+  const double* tn = t.count("normal") ? need(t, truth_path, "normal", "<f8", n, 3).as<double>() : nullptr;
+
+  std::vector<double> abs_err, rel_err, angle, closest_err;
+  abs_err.reserve(n);
+  rel_err.reserve(n);
+  std::size_t sign_wrong = 0, non_finite = 0, tri_same = 0, tri_compared = 0, tri_tied = 0, tri_unknown = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = ans.distance[i];
+    if (!std::isfinite(a)) {  // NaN / inf: counted, kept out of the statistics
+      ++non_finite;
+      continue;
+    }
+    const bool is_near = std::abs(td[i]) < near_thr;
+    const double truth_signed = ti[i] ? -td[i] : td[i];
+    double e = std::abs(a - truth_signed);
+    // Near the surface the sign is ill-defined: compare magnitudes, and count no sign error.
+    if (is_near) e = std::abs(std::abs(a) - td[i]);
+    else if ((a < 0) != ti[i]) ++sign_wrong;
+    abs_err.push_back(e);
+    rel_err.push_back(diagonal > 0 ? e / diagonal : e);
+    if (tc && finite(ans.closest[i])) {
+      Vec3d q{tc[3 * i], tc[3 * i + 1], tc[3 * i + 2]};
+      closest_err.push_back(norm(ans.closest[i] - q));
+    }
+    const std::int64_t tri = ans.triangle[i];
+    const std::int64_t nt = ties ? ties[i] : 1;
+    if (tri < 0) {
+      ++tri_unknown;
+    } else if (nt <= 1) {
+      ++tri_compared;
+      tri_same += tri == tt[i];
+    } else if (tied && std::size_t(nt) <= max_tied) {
+      // A tie (shared edge or vertex): any of the tied triangles is right.
+      ++tri_compared;
+      ++tri_tied;
+      for (std::size_t k = 0; k < max_tied; ++k) tri_same += tied[i * max_tied + k] == tri;
+    } else {
+      ++tri_tied;  // more ties than recorded: not compared
+    }
+    // The contact normal against the closest triangle's face normal, where that is unambiguous.
+    if (tn && nt <= 1) {
+      Vec3d m = ans.normal[i];
+      Vec3d b{tn[3 * i], tn[3 * i + 1], tn[3 * i + 2]};
+      if (!finite(m) || squared_norm(m) == 0) {
+        angle.push_back(180.0);  // no usable normal: as wrong as it gets
+      } else if (squared_norm(b) > 0) {
+        double c = std::clamp(dot(normalized(m), normalized(b)), -1.0, 1.0);
+        angle.push_back(std::acos(c) * 57.29577951308232);
+      }
+    }
+  }
+  acc["inside"] = nullptr;
+  acc["distance"] = {{"abs_error", error_stats(abs_err)},
+                     {"rel_error", error_stats(rel_err)},
+                     {"closest_error", error_stats(closest_err)},
+                     {"normal_angle_deg", error_stats(angle)},
+                     {"sign_wrong", sign_wrong},
+                     {"sign_wrong_rate", n - near ? double(sign_wrong) / double(n - near) : 0.0},
+                     {"non_finite", non_finite},
+                     {"triangle_agreement", tri_compared ? json(double(tri_same) / double(tri_compared)) : json(nullptr)},
+                     {"triangle_compared", tri_compared},
+                     {"triangle_tied", tri_tied},
+                     {"triangle_unknown", tri_unknown}};
+  return acc;
+}
+
+}  // namespace bvhbench

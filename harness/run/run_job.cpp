@@ -1,0 +1,324 @@
+#include "harness/run/run_job.hpp"
+
+#include <malloc.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <new>
+#include <numeric>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include "harness/core/mesh.hpp"
+#include "harness/core/query_set.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/io/mesh_io.hpp"
+#include "harness/io/query_set_io.hpp"
+#include "harness/run/accuracy.hpp"
+#include "harness/run/calibration.hpp"
+#include "harness/run/machine_fingerprint.hpp"
+#include "harness/run/system_info.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/printable.hpp"
+#include "harness/util/process_memory.hpp"
+#include "harness/util/progress.hpp"
+
+namespace bvhbench {
+
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::json;
+
+std::string dump_result(const json& j) {
+  // Strings are made printable where they enter a result; `replace` is the last guard, so that a
+  // byte that slipped through costs one U+FFFD, not the result file.
+  return j.dump(2, ' ', false, json::error_handler_t::replace);
+}
+
+void write_json_atomic(const std::string& path, const json& j) {
+  std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw file_error(path, "cannot open for writing");
+    f << dump_result(j) << "\n";
+    f.flush();
+    if (!f) throw file_error(path, "write failed (disk full?)");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw file_error(path, "cannot rename into place");
+  }
+}
+
+json job_block(const JobSpec& spec) {
+  json j;
+  std::string name;
+  std::map<std::string, std::string> given;
+  try {
+    parse_method_spec(spec.method_spec, &name, &given);
+  } catch (...) {
+    name = spec.method_spec;
+  }
+  j["method"] = printable(name);
+  j["method_spec"] = printable(spec.method_spec);
+  json given_json = json::object();
+  for (const auto& [k, v] : given) given_json[printable(k)] = printable(v);
+  j["params"] = given_json;
+  j["params_key"] = "";
+  // Resolve the parameters when the method is known, so that status rows written without running
+  // the job (a crash, a query set that could not be made) pair and group like the job's own rows.
+  if (const MethodInfo* info = Registry::global().find(name)) {
+    try {
+      Params p = Params::resolve(name, info->params, given);
+      j["params"] = p.values();
+      j["params_key"] = p.non_default_string();
+    } catch (const std::exception&) {
+    }
+  }
+  j["query"] = to_string(spec.query_type);
+  // Paths are the user's bytes (a Linux file name need not be UTF-8); JSON needs UTF-8.
+  j["mesh"] = {{"path", printable(spec.mesh_path)}};
+  j["queries"] = {{"path", printable(spec.queries_path)}};
+  j["repetitions"] = spec.repeat;
+  j["threads"] = spec.threads;
+  j["truth"] = spec.truth_path.empty() ? json(nullptr) : json(printable(spec.truth_path));
+  return j;
+}
+
+json make_result(const JobSpec& spec, const std::string& status_code, const std::string& message) {
+  json r;
+  r["schema"] = "bvhbench.result/1";
+  r["context"] = run_context();
+  r["job"] = job_block(spec);
+  r["status"] = status_code;
+  r["message"] = printable(message);
+  r["accuracy"] = nullptr;
+  return r;
+}
+
+namespace {
+
+double percentile(std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0;
+  double pos = q * (sorted.size() - 1);
+  std::size_t i = std::size_t(pos);
+  double f = pos - i;
+  if (i + 1 >= sorted.size()) return sorted.back();
+  return sorted[i] * (1 - f) + sorted[i + 1] * f;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return percentile(v, 0.5);
+}
+
+/// Keeps the compiler from discarding query results in timed loops.
+struct Sink {
+  double acc = 0;
+  void take(bool b) { acc += b ? 1.0 : 0.0; }
+  void take(const DistanceResult& d) { acc += d.distance + double(d.triangle); }
+};
+volatile double g_sink;
+
+// One timed pass over all queries; returns seconds.
+double timed_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts) {
+  Sink s;
+  m.reset_path();
+  auto t0 = Clock::now();
+  if (qt == QueryType::inside) {
+    for (const auto& p : pts) s.take(m.inside(p));
+  } else {
+    for (const auto& p : pts) s.take(m.distance(p));
+  }
+  auto t1 = Clock::now();
+  g_sink = s.acc;
+  return std::chrono::duration<double>(t1 - t0).count();
+}
+
+}  // namespace
+
+json run_job(const JobSpec& spec) {
+  json r = make_result(spec, status::ok, "");
+  auto fail = [&](const char* code, const std::string& msg) {
+    r["status"] = code;
+    r["message"] = printable(msg);  // a library's or a reader's text may not be UTF-8
+  };
+  try {
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                std::max(1, spec.threads));
+    const MethodInfo* info = nullptr;
+    Params params;
+    auto method = Registry::global().create(spec.method_spec, &info, &params);
+    r["job"]["method"] = info->name;
+    r["job"]["params"] = params.values();
+    r["job"]["params_key"] = params.non_default_string();
+    r["context"] = run_context();  // registration may have noted library versions
+
+    QuerySet qs = load_query_set(spec.queries_path);
+    r["job"]["queries"] = {{"path", printable(qs.path)},
+                           {"sha256", qs.sha256},
+                           {"kind", qs.kind()},
+                           {"n", qs.points.size()},
+                           {"seed", qs.meta.value("seed", json(nullptr))},
+                           {"mesh_sha256", qs.meta.value("mesh_sha256", json(nullptr))}};
+
+    if (!method->supports(spec.query_type)) {
+      fail(status::unsupported, info->name + " does not answer " + to_string(spec.query_type) +
+                                    " queries" +
+                                    (params.non_default_string().empty()
+                                         ? std::string()
+                                         : " with " + params.non_default_string()));
+      return r;
+    }
+
+    Progress load_progress("loading " + spec.mesh_path, 1.0, spec.progress);
+    Mesh mesh = load_mesh(spec.mesh_path, nullptr);
+    load_progress.finish();
+    const Box3d bounds = mesh.bounds();
+    const double diagonal = bounds.diagonal();
+    const std::string mesh_sha256 = mesh.sha256;  // the mesh itself is released after build
+    r["job"]["mesh"] = {{"path", printable(mesh.path)},
+                        {"sha256", mesh.sha256},
+                        {"triangles", mesh.num_triangles()},
+                        {"vertices", mesh.vertices.size()},
+                        {"diagonal", diagonal}};
+    if (qs.meta.contains("mesh_sha256") && qs.meta["mesh_sha256"] != mesh.sha256)
+      r["job"]["queries"]["mesh_mismatch"] = true;
+
+    // ---- build ------------------------------------------------------------------------------
+    BuildContext ctx;
+    ctx.threads = spec.threads;
+    ctx.query_type = spec.query_type;
+    ctx.query_bounds = qs.bounds();
+    ctx.query_kind = qs.kind();
+    ctx.tmp_dir = spec.tmp_dir;
+    ctx.memory_budget_bytes = spec.memory_budget_bytes;
+    const std::size_t mesh_bytes = mesh.bytes();
+    reset_peak_rss();
+    auto b0 = Clock::now();
+    method->build(mesh, ctx);
+    auto b1 = Clock::now();
+    const std::size_t build_peak = peak_rss_bytes();
+    const std::size_t structure_bytes = method->structure_bytes();
+    r["build"] = {{"seconds", std::chrono::duration<double>(b1 - b0).count()},
+                  {"structure_bytes", structure_bytes},
+                  {"peak_rss_bytes", build_peak}};
+    r["structure"] = method->info();
+
+    // The method keeps what it needs: release the mesh so query memory is the method's own.
+    { Mesh released = std::move(mesh); }
+    malloc_trim(0);
+    reset_peak_rss();
+
+    // ---- counted warm-up pass: answers and work counters ----------------------------------------
+    const auto& pts = qs.points;
+    const std::size_t n = pts.size();
+    Answers answers;
+    answers.resize(spec.query_type, n);
+    method->reset_counters();
+    method->reset_path();
+    if (spec.query_type == QueryType::inside) {
+      for (std::size_t i = 0; i < n; ++i) answers.inside[i] = method->inside(pts[i]) ? 1 : 0;
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        DistanceResult d = method->distance(pts[i]);
+        answers.distance[i] = d.distance;
+        answers.closest[i] = d.closest;
+        answers.normal[i] = d.normal;
+        answers.triangle[i] = d.triangle;
+      }
+    }
+    json counters = json::object();
+    for (const Counter& c : method->counters())
+      counters[c.name] = n ? double(c.value) / double(n) : 0.0;
+    r["counters"] = counters;
+    // Which of them only compare exactly on a like machine, and the machine they were counted on.
+    r["machine_dependent"] = {{"counters", info->machine_dependent_counters},
+                              {"fingerprint", machine_fingerprint(method->machine_facts())}};
+    std::size_t query_rss = current_rss_bytes();
+
+    r["calibration"] = measure_calibration();
+    // ---- throughput: `repeat` passes ----------------------------------------------------------
+    std::vector<double> qps, pass_seconds;
+    Progress qprog("querying " + info->name, spec.repeat + 1, spec.progress);
+    for (int rep = 0; rep < spec.repeat; ++rep) {
+      double s = timed_pass(*method, spec.query_type, pts);
+      pass_seconds.push_back(s);
+      qps.push_back(s > 0 ? double(n) / s : 0.0);
+      query_rss = std::max(query_rss, current_rss_bytes());
+      qprog.update(rep + 1);
+    }
+
+    // ---- latency: one pass with per-query timestamps ------------------------------------------
+    std::vector<double> lat(n);
+    {
+      Sink s;
+      method->reset_path();
+      if (spec.query_type == QueryType::inside) {
+        for (std::size_t i = 0; i < n; ++i) {
+          auto t0 = Clock::now();
+          s.take(method->inside(pts[i]));
+          lat[i] = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
+        }
+      } else {
+        for (std::size_t i = 0; i < n; ++i) {
+          auto t0 = Clock::now();
+          s.take(method->distance(pts[i]));
+          lat[i] = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
+        }
+      }
+      g_sink = s.acc;
+    }
+    qprog.finish();
+    query_rss = std::max(query_rss, current_rss_bytes());
+    std::size_t over = std::count_if(lat.begin(), lat.end(), [&](double v) { return v > spec.deadline_ns; });
+    double mean = n ? std::accumulate(lat.begin(), lat.end(), 0.0) / double(n) : 0.0;
+    std::sort(lat.begin(), lat.end());
+    json q;
+    q["n"] = n;
+    if (!qps.empty()) {
+      q["throughput_qps"] = {{"median", median(qps)},
+                             {"min", *std::min_element(qps.begin(), qps.end())},
+                             {"max", *std::max_element(qps.begin(), qps.end())},
+                             {"samples", qps}};
+    } else {
+      q["throughput_qps"] = {{"median", nullptr}, {"min", nullptr}, {"max", nullptr}, {"samples", json::array()}};
+    }
+    q["pass_seconds"] = pass_seconds;
+    q["latency_ns"] = {{"p50", percentile(lat, 0.5)},
+                       {"p99", percentile(lat, 0.99)},
+                       {"p999", percentile(lat, 0.999)},
+                       {"max", lat.empty() ? 0.0 : lat.back()},
+                       {"mean", mean}};
+    q["deadline_ns"] = spec.deadline_ns;
+    q["over_deadline"] = over;
+    r["queries"] = q;
+
+    const std::size_t query_peak = peak_rss_bytes();
+    r["memory"] = {{"structure_bytes", structure_bytes},
+                   {"peak_rss_bytes", std::max(build_peak, query_peak)},
+                   {"query_rss_bytes", query_rss},
+                   {"mesh_bytes", mesh_bytes}};
+
+    // ---- answers and accuracy -----------------------------------------------------------------
+    if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
+    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256);
+  } catch (const InputError& e) {
+    fail(status::rejected_input, e.what());
+  } catch (const UnsupportedError& e) {
+    fail(status::unsupported, e.what());
+  } catch (const std::bad_alloc&) {
+    fail(status::oom, "out of memory (std::bad_alloc)");
+  } catch (const std::exception& e) {
+    fail(status::error, e.what());
+  } catch (...) {
+    fail(status::error, "unknown exception");
+  }
+  return r;
+}
+
+}  // namespace bvhbench

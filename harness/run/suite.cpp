@@ -1,0 +1,396 @@
+#include "harness/run/suite.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "harness/core/query_set.hpp"
+#include "harness/core/registry.hpp"
+#include "harness/io/query_set_io.hpp"
+#include "harness/run/run_job.hpp"
+#include "harness/util/errors.hpp"
+#include "harness/util/json_path.hpp"
+#include "harness/util/progress.hpp"
+#include "harness/util/sha256.hpp"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace bvhbench {
+
+// ---------------------------------------------------------------------------------------------
+// Plans and ids
+// ---------------------------------------------------------------------------------------------
+std::string file_safe(const std::string& s) {
+  std::string o;
+  for (char c : s) o += (std::isalnum((unsigned char)c) || c == '.' || c == '-' || c == '=' || c == '_') ? c : '_';
+  return o;
+}
+
+std::string format_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+std::string QueryPlan::label() const {
+  if (!file.empty()) return "file-" + name;
+  std::string s = kind + "-n" + std::to_string(n) + "-s" + std::to_string(seed);
+  if (!params.empty()) {
+    std::string p;
+    for (auto& [k, v] : params) p += k + "=" + format_number(v) + ";";
+    s += "-" + sha256_hex(p.data(), p.size()).substr(0, 8);
+  }
+  return s;
+}
+
+namespace {
+
+[[noreturn]] void yaml_error(const std::string& file, const YAML::Node& node, const std::string& what) {
+  std::string where = node.Mark().line >= 0 ? " (line " + std::to_string(node.Mark().line + 1) + ")" : "";
+  throw file_error(file, what + where);
+}
+
+std::vector<YAML::Node> as_list(const YAML::Node& n) {
+  std::vector<YAML::Node> out;
+  if (!n) return out;
+  if (n.IsSequence())
+    for (auto x : n) out.push_back(x);
+  else
+    out.push_back(n);
+  return out;
+}
+
+std::string scalar(const std::string& file, const YAML::Node& n, const std::string& what) {
+  if (!n.IsScalar()) yaml_error(file, n, what + " must be a scalar");
+  return n.as<std::string>();
+}
+
+// Expands {name: m, params: {a: [1, 2], b: x}} into "m:a=1,b=x", "m:a=2,b=x".
+std::vector<std::string> expand_method(const std::string& file, const YAML::Node& n) {
+  if (n.IsScalar()) return {n.as<std::string>()};
+  if (!n.IsMap() || !n["name"]) yaml_error(file, n, "a method is NAME, NAME:k=v or {name:, params:}");
+  std::string name = scalar(file, n["name"], "method name");
+  std::vector<std::string> specs = {""};
+  if (auto ps = n["params"]) {
+    if (!ps.IsMap()) yaml_error(file, ps, "method params must be a map");
+    std::vector<std::pair<std::string, std::vector<std::string>>> axes;
+    for (auto kv : ps) {
+      std::vector<std::string> vals;
+      for (auto v : as_list(kv.second)) vals.push_back(scalar(file, v, "parameter value"));
+      if (vals.empty()) yaml_error(file, kv.second, "empty value list for " + kv.first.as<std::string>());
+      axes.push_back({kv.first.as<std::string>(), vals});
+    }
+    for (auto& [k, vals] : axes) {
+      if (specs.size() * vals.size() > kMaxSuiteJobs)
+        yaml_error(file, n, "the parameter sweep makes more than " + std::to_string(kMaxSuiteJobs) + " variants");
+      std::vector<std::string> next;
+      for (auto& s : specs)
+        for (auto& v : vals) next.push_back(s + (s.empty() ? "" : ",") + k + "=" + v);
+      specs = next;
+    }
+  }
+  std::vector<std::string> out;
+  for (auto& s : specs) out.push_back(s.empty() ? name : name + ":" + s);
+  return out;
+}
+
+// {file: PATH, name: NAME}: an existing points file as a query set. Two different files may not
+// share a name, since it is what tells their jobs apart.
+QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const fs::path& base,
+                          std::map<std::string, std::string>& labels) {
+  for (const char* key : {"kind", "n", "seed", "params"})
+    if (n[key]) yaml_error(suite, n, std::string("a points file ({file:, name:}) takes no '") + key + "'");
+  for (auto kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    if (key != "file" && key != "name") yaml_error(suite, n, "unknown key '" + key + "' of a points file");
+  }
+  QueryPlan q;
+  q.kind = "file";
+  q.file = scalar(suite, n["file"], "file");
+  if (q.file.empty()) yaml_error(suite, n, "file: is empty");
+  if (fs::path(q.file).is_relative()) q.file = (base / q.file).lexically_normal().string();
+  q.name = n["name"] ? scalar(suite, n["name"], "name") : fs::path(q.file).stem().string();
+  if (q.name.empty()) yaml_error(suite, n, "name: is empty");
+  auto [it, fresh] = labels.emplace(q.label(), q.file);
+  if (!fresh && it->second != q.file)
+    yaml_error(suite, n, "two points files are named '" + q.name + "' (" + it->second + " and " + q.file +
+                             "); give one a name: to tell their jobs apart");
+  return q;
+}
+
+}  // namespace
+
+SuiteConfig load_suite(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw file_error(path, "cannot read suite file");
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return parse_suite(text, path);
+}
+
+namespace {
+
+/// The suite of the YAML document `root` of the file `path` (load_suite). Throws InputError, or a
+/// YAML::Exception where a value of the wrong shape is read (see parse_suite).
+SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
+  SuiteConfig cfg;
+  cfg.file = path;
+  if (!root.IsMap()) throw file_error(path, "a suite is a YAML map (see suites/README.md)");
+  const fs::path base = fs::path(path).parent_path();
+  try {
+    cfg.name = root["name"] ? root["name"].as<std::string>() : fs::path(path).stem().string();
+    if (root["repeat"]) cfg.repeat = root["repeat"].as<int>();
+    if (root["timeout_s"]) cfg.timeout_s = root["timeout_s"].as<double>();
+    if (root["memory_limit_mb"]) cfg.memory_limit_mb = root["memory_limit_mb"].as<double>();
+    if (root["truth"]) cfg.truth = root["truth"].as<bool>();
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("bad top-level value: ") + e.what());
+  }
+  if (cfg.repeat < 1) throw file_error(path, "repeat must be >= 1");
+  if (!(cfg.timeout_s > 0)) throw file_error(path, "timeout_s must be > 0");
+  // The child's address-space limit is set from it (0: none).
+  if (!(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb)))
+    throw file_error(path, "memory_limit_mb must be a number of MiB >= 0 (0 = no limit)");
+  auto matrices = root["matrices"];
+  if (!matrices || !matrices.IsSequence() || matrices.size() == 0)
+    throw file_error(path, "missing 'matrices:' (a list of {meshes, queries, query, methods})");
+
+  std::set<std::string> seen;
+  std::map<std::string, std::string> query_files;  // label -> file, across matrices
+  double expanded = 0;                              // jobs of the matrices so far, duplicates included
+  for (auto m : matrices) {
+    if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
+    for (const char* key : {"meshes", "queries", "methods"})
+      if (!m[key]) yaml_error(path, m, std::string("matrix without '") + key + "'");
+    std::vector<MeshPlan> meshes;
+    for (auto n : as_list(m["meshes"])) {
+      MeshPlan mp;
+      if (n.IsScalar()) {
+        mp.path = n.as<std::string>();
+      } else if (n.IsMap() && n["path"]) {
+        mp.path = n["path"].as<std::string>();
+        if (n["name"]) mp.name = n["name"].as<std::string>();
+      } else {
+        yaml_error(path, n, "a mesh is a path or {path:, name:}");
+      }
+      if (fs::path(mp.path).is_relative()) mp.path = (base / mp.path).lexically_normal().string();
+      if (mp.name.empty()) mp.name = fs::path(mp.path).stem().string();
+      meshes.push_back(mp);
+    }
+    std::vector<QueryPlan> queries;
+    for (auto n : as_list(m["queries"])) {
+      QueryPlan q;
+      if (n.IsMap() && n["file"]) {
+        queries.push_back(file_query_plan(path, n, base, query_files));
+        continue;
+      }
+      try {
+        if (n.IsScalar()) {
+          q.kind = n.as<std::string>();
+        } else if (n.IsMap()) {
+          if (n["name"]) yaml_error(path, n, "name: is for a points file ({file: PATH, name: NAME})");
+          if (n["kind"]) q.kind = n["kind"].as<std::string>();
+          if (n["n"]) q.n = n["n"].as<std::size_t>();
+          if (n["seed"]) q.seed = n["seed"].as<std::uint64_t>();
+          if (n["params"])
+            for (auto kv : n["params"]) q.params[kv.first.as<std::string>()] = kv.second.as<double>();
+        } else {
+          yaml_error(path, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
+        }
+      } catch (const YAML::Exception& e) {
+        yaml_error(path, n, std::string("bad query set: ") + e.what());
+      }
+      if (q.kind == "file") yaml_error(path, n, "a points file is given as {file: PATH}");
+      if (!find_query_kind(q.kind)) yaml_error(path, n, "unknown query kind '" + q.kind + "'");
+      if (q.n == 0) yaml_error(path, n, "n must be > 0");
+      queries.push_back(q);
+    }
+    std::vector<QueryType> types;
+    for (auto n : as_list(m["query"] ? m["query"] : YAML::Node(std::vector<std::string>{"inside", "distance"}))) {
+      try {
+        types.push_back(parse_query_type(n.as<std::string>()));
+      } catch (const InputError& e) {
+        yaml_error(path, n, e.what());
+      }
+    }
+    std::vector<std::string> methods;
+    for (auto n : as_list(m["methods"]))
+      for (auto& s : expand_method(path, n)) {
+        // Validate now: a typo in a suite is bad input, not 40 failed jobs.
+        std::string name;
+        std::map<std::string, std::string> given;
+        try {
+          parse_method_spec(s, &name, &given);
+        } catch (const InputError& e) {
+          yaml_error(path, n, e.what());
+        }
+        const MethodInfo* info = Registry::global().find(name);
+        if (!info) {
+          try {
+            Registry::global().create(s);
+          } catch (const InputError& e) {
+            yaml_error(path, n, e.what());
+          }
+        }
+        try {
+          Params::resolve(name, info->params, given);
+        } catch (const InputError& e) {
+          yaml_error(path, n, e.what());
+        }
+        methods.push_back(s);
+        if (methods.size() > kMaxSuiteJobs)
+          yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
+      }
+    // Before the product is made: its size, in floating point since it may not fit in 64 bits.
+    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size());
+    if (expanded > double(kMaxSuiteJobs))
+      yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
+                              " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
+    for (auto& mesh : meshes)
+      for (auto& q : queries)
+        for (auto t : types)
+          for (auto& spec : methods) {
+            JobPlan j;
+            j.mesh = mesh;
+            j.queries = q;
+            j.query = t;
+            j.method_spec = spec;
+            j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec);
+            if (j.id.size() > 200) j.id = j.id.substr(0, 180) + "-" + sha256_hex(j.id.data(), j.id.size()).substr(0, 12);
+            if (seen.insert(j.id).second) cfg.jobs.push_back(j);
+          }
+  }
+  return cfg;
+}
+
+}  // namespace
+
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("malformed YAML: ") + e.what());
+  }
+  // A value of the wrong shape where a string or a number is read (a map as a mesh path, a list
+  // as a parameter name) is bad input like any other; yaml-cpp's message names its line.
+  try {
+    return expand_suite(root, path);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("bad value: ") + e.what());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// summary.csv
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+std::string csv_escape(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"') o += '"';
+    o += c == '\n' ? ' ' : c;
+  }
+  return o + "\"";
+}
+
+std::string num(const json& j) {
+  if (j.is_null()) return "";
+  if (j.is_number_integer() || j.is_number_unsigned()) return std::to_string(j.get<long long>());
+  if (j.is_number()) {
+    std::ostringstream os;
+    os.precision(9);
+    os << j.get<double>();
+    return os.str();
+  }
+  if (j.is_boolean()) return j.get<bool>() ? "true" : "false";
+  if (j.is_string()) return j.get<std::string>();
+  return "";
+}
+
+
+const std::vector<std::string> kCounterColumns = {"nodes_visited", "triangles_tested", "planes_tested",
+                                                   "bytes_read", "cache_hit_rate"};
+
+}  // namespace
+
+std::vector<std::string> summary_header() {
+  std::vector<std::string> h = {"job_id", "method", "params_key", "mesh", "triangles", "query_kind", "n",
+                                "query", "status", "message", "build_s", "structure_bytes",
+                                "bytes_per_triangle", "peak_rss_bytes", "query_rss_bytes", "qps_median",
+                                "qps_min", "qps_max", "p50_ns", "p99_ns", "p999_ns", "max_ns",
+                                "over_deadline", "inside_wrong_rate", "inside_wrong_far",
+                                "dist_abs_err_max", "dist_rel_err_p99", "normal_err_p99_deg"};
+  for (auto& c : kCounterColumns) h.push_back("c_" + c);
+  return h;
+}
+
+std::vector<std::string> summary_row(const json& r) {
+  auto mesh_name = [&]() -> std::string {
+    json n = json_at(r, {"job", "mesh", "name"});
+    if (n.is_string()) return n;
+    json p = json_at(r, {"job", "mesh", "path"});
+    return p.is_string() ? fs::path(p.get<std::string>()).stem().string() : "";
+  };
+  json tris = json_at(r, {"job", "mesh", "triangles"});
+  json sb = json_at(r, {"build", "structure_bytes"});
+  std::string bpt;
+  if (tris.is_number() && sb.is_number() && tris.get<double>() > 0) bpt = num(json(sb.get<double>() / tris.get<double>()));
+  std::vector<std::string> row = {
+      num(json_at(r, {"job", "id"})), num(json_at(r, {"job", "method"})), num(json_at(r, {"job", "params_key"})), mesh_name(),
+      num(tris), num(json_at(r, {"job", "queries", "kind"})), num(json_at(r, {"job", "queries", "n"})),
+      num(json_at(r, {"job", "query"})), num(json_at(r, {"status"})), num(json_at(r, {"message"})),
+      num(json_at(r, {"build", "seconds"})), num(sb), bpt, num(json_at(r, {"memory", "peak_rss_bytes"})),
+      num(json_at(r, {"memory", "query_rss_bytes"})), num(json_at(r, {"queries", "throughput_qps", "median"})),
+      num(json_at(r, {"queries", "throughput_qps", "min"})), num(json_at(r, {"queries", "throughput_qps", "max"})),
+      num(json_at(r, {"queries", "latency_ns", "p50"})), num(json_at(r, {"queries", "latency_ns", "p99"})),
+      num(json_at(r, {"queries", "latency_ns", "p999"})), num(json_at(r, {"queries", "latency_ns", "max"})),
+      num(json_at(r, {"queries", "over_deadline"})), num(json_at(r, {"accuracy", "inside", "rate"})),
+      num(json_at(r, {"accuracy", "inside", "wrong_far"})),
+      num(json_at(r, {"accuracy", "distance", "abs_error", "max"})),
+      num(json_at(r, {"accuracy", "distance", "rel_error", "p99"})),
+      num(json_at(r, {"accuracy", "distance", "normal_angle_deg", "p99"}))};
+  for (auto& c : kCounterColumns) row.push_back(num(json_at(r, {"counters", c.c_str()})));
+  for (auto& s : row) s = csv_escape(s);
+  return row;
+}
+
+void write_summary_csv(const std::string& path, const std::vector<json>& results) {
+  std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw file_error(path, "cannot write");
+    auto line = [&](const std::vector<std::string>& cells) {
+      for (std::size_t i = 0; i < cells.size(); ++i) f << (i ? "," : "") << cells[i];
+      f << "\n";
+    };
+    line(summary_header());
+    for (auto& r : results) line(summary_row(r));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw file_error(path, "cannot rename into place");
+}
+
+}  // namespace bvhbench

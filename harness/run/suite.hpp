@@ -1,0 +1,75 @@
+#pragma once
+/// Suites: a YAML matrix of jobs (suites/*.yml), each run in its own child process with a time
+/// limit and an address-space limit, so that a crash, a hang or a blow-up becomes a status row.
+/// Format: see suites/README.md.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "harness/core/method.hpp"
+
+namespace bvhbench {
+
+/// How to make one query set, or which points file to take as one.
+struct QueryPlan {
+  std::string kind = "random";  ///< "file" for a points file
+  std::size_t n = 10000;
+  std::uint64_t seed = 1;
+  std::map<std::string, double> params;
+  std::string file;  ///< a points file (.npy, .xyz, .csv), resolved against the suite file's folder
+  std::string name;  ///< a points file's short name in job ids (default: its stem)
+  /// "random-n10000-s1[-<hash of params>]"; "file-<name>" for a points file.
+  std::string label() const;
+};
+
+struct MeshPlan {
+  std::string name;  ///< short name used in job ids
+  std::string path;  ///< resolved against the suite file's folder
+};
+
+struct JobPlan {
+  std::string id;    ///< unique, filesystem-safe, stable across runs
+  MeshPlan mesh;
+  QueryPlan queries;
+  QueryType query = QueryType::inside;
+  std::string method_spec;
+};
+
+struct SuiteConfig {
+  std::string name;
+  std::string file;
+  int repeat = 5;
+  double timeout_s = 600;
+  double memory_limit_mb = 16384;
+  bool truth = true;  ///< attach the oracle (bvhbench truth) when it can be computed
+  std::vector<JobPlan> jobs;
+};
+
+/// The most jobs a suite may expand to (meshes x query sets x queries x method variants, summed
+/// over its matrices, before duplicates are dropped). A few hundred bytes of parameter sweeps or
+/// aliased matrices can ask for millions, which would take the loader minutes and gigabytes only
+/// to list; our largest suite has about 600.
+inline constexpr std::size_t kMaxSuiteJobs = 100000;
+
+/// `s` with every character but [A-Za-z0-9.=_-] replaced by '_': job ids and the file names made
+/// from them.
+std::string file_safe(const std::string& s);
+/// A query-set parameter value as labels and the `queries --param` command line write it.
+std::string format_number(double v);
+
+/// Parses and expands a suite file. Throws InputError naming the file and the problem.
+SuiteConfig load_suite(const std::string& path);
+/// The same for the suite text `yaml` of the file `path` (which names it in messages; relative
+/// paths in it are resolved against its folder). Reads no file.
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path);
+
+/// The flat summary row of one result (also used by compare and tests).
+std::vector<std::string> summary_header();
+std::vector<std::string> summary_row(const nlohmann::json& result);
+/// Writes summary.csv for these results atomically.
+void write_summary_csv(const std::string& path, const std::vector<nlohmann::json>& results);
+
+}  // namespace bvhbench

@@ -1,0 +1,313 @@
+"""plots/report.py builds every chart and table from a small result set of the real runner.
+
+The fixture (tests/fixtures/results_small: a real suite run, tests/fixtures/results_small.yml,
+committed by its make_fixture.py; test_report_fixture.py checks it still matches the runner)
+holds 5 methods on 2 models (cow, fandisk), an EBP-Octree sweep around its default and an OpenVDB
+sweep without it, path-coherent variants, approximate OpenVDB answers, crash / timeout / oom /
+error / rejected_input jobs and 4 stress meshes. Expected figures are computed here from the
+fixture's own results, so that a regenerated fixture keeps the tests meaningful.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+REPORT = os.path.join(ROOT, "plots", "report.py")
+FIXTURE = os.path.join(ROOT, "tests", "fixtures", "results_small")
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+
+import charts  # noqa: E402
+import fmt  # noqa: E402
+import metrics  # noqa: E402
+import results_io  # noqa: E402
+
+EXPECTED_CHARTS = list(charts.CHARTS)
+STRESS_CASES = {"spot_open", "stress_nonmanifold_edges", "stress_single_triangle", "stress_empty"}
+
+
+def fixture_results():
+    """{job id: parsed result} of the committed fixture."""
+    runs = os.path.join(FIXTURE, "runs")
+    out = {}
+    for f in sorted(os.listdir(runs)):
+        with open(os.path.join(runs, f), encoding="utf-8") as fh:
+            r = json.load(fh)
+        out[r["job"]["id"]] = r
+    return out
+
+
+RESULTS = fixture_results()
+
+
+def qps(job_id):
+    return RESULTS[job_id]["queries"]["throughput_qps"]["median"]
+
+
+def table_line(md, *starts_and_parts):
+    """The one Markdown table line that starts with the first string and contains the others."""
+    start, *parts = starts_and_parts
+    found = [l for l in md.splitlines() if l.startswith(start) and all(p in l for p in parts)]
+    assert len(found) == 1, (starts_and_parts, found)
+    return found[0]
+
+
+def cells(line):
+    return [c.strip() for c in line.strip().strip("|").split("|")]
+
+
+def run_report(results, *extra):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, REPORT, str(results), *extra], capture_output=True,
+                          text=True, env=env, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    """The fixture result set copied to a temporary folder, and its report built there."""
+    results = tmp_path_factory.mktemp("results") / "results_small"
+    shutil.copytree(FIXTURE, results, ignore=shutil.ignore_patterns("*.py"))
+    proc = run_report(results, "--strict")
+    assert proc.returncode == 0, proc.stderr
+    return results / "report"
+
+
+def read(path):
+    return path.read_text(encoding="utf-8")
+
+
+def test_every_chart_is_written_as_png_and_svg(report):
+    for name in EXPECTED_CHARTS:
+        for ext in ("png", "svg"):
+            f = report / f"{name}.{ext}"
+            assert f.is_file(), f"{f.name} missing"
+            assert f.stat().st_size > 1000, f"{f.name} is (nearly) empty"
+    assert (report / "pareto_inside_wrong_rate.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_report_md_shows_every_chart(report):
+    md = read(report / "report.md")
+    for name in EXPECTED_CHARTS:
+        assert f"]({name}.png)" in md, f"report.md does not show {name}"
+    assert "Not drawn" not in md and "failed to draw" not in md
+
+
+def test_report_states_machine_and_run(report):
+    md = read(report / "report.md")
+    ctx = next(iter(RESULTS.values()))["context"]
+    for value in (ctx["host"], ctx["cpu_model"], ctx["git_commit"][:10], ctx["date"][:10]):
+        assert value in md
+    assert ctx["host"] in read(report / "paper_table.md")
+    assert ctx["host"] in read(report / "paper_table.tex")
+
+
+def test_paper_tables_have_ebp_row_ratios_and_published_figures(report):
+    md = read(report / "paper_table.md")
+    tex = read(report / "paper_table.tex")
+    assert "**ebp_octree**" in md
+    assert "EBP/peer" in md and "peer/EBP" in md
+    # cgal_aabb on cow, random point-in-solid: the EBP-Octree's rate over CGAL's.
+    ratio = qps("cow__random-n500-s1__inside__ebp_octree") / qps(
+        "cow__random-n500-s1__inside__cgal_aabb")
+    assert cells(table_line(md, "| cow | 5.8k | cgal_aabb |", "×"))[3] == fmt.ratio(ratio)
+    assert "2.5 kHz" in md and "32 kHz" in md and "1 MHz" in md
+    # A path-coherent variant is its own row, and not an EBP "peer" in the ratios.
+    assert "**ebp_octree:coherent=true**" in md
+    assert "| cow | 5.8k | ebp_octree:coherent=true |" not in md
+    levels = RESULTS["cow__random-n500-s1__inside__ebp_octree"]["structure"]["levels"]
+    assert cells(table_line(md, "| **cow** | **5.8k** | **ebp_octree** |"))[3] == f"**{levels}**"
+    assert r"\textbf{ebp\_octree}" in tex
+    assert r"\begin{tabular}" in tex and r"\bottomrule" in tex
+    assert "EBP/peer" in tex and r"$\times$" in tex
+    # A job that did not finish ok shows its status, not an empty cell (the row of the fault
+    # method's representative configuration, one of its failing modes).
+    rep = results_io.representative_configs(results_io.load(FIXTURE).model_jobs())["fault"]
+    status = RESULTS[f"cow__random-n500-s1__inside__fault_{rep}"]["status"]
+    assert status in ("crash", "timeout")
+    main_table = md.split("\nRatios")[0]
+    assert cells(table_line(main_table, f"| cow | 5.8k | fault:{rep} |"))[7] == status
+
+
+def test_non_ok_jobs_are_listed_with_messages(report):
+    md = read(report / "report.md")
+    section = md.split("## Jobs that did not finish ok")[1].split("\n## ")[0]
+    failed = {jid: r for jid, r in RESULTS.items() if r["status"] != "ok"}
+    assert {r["status"] for r in failed.values()} == {"crash", "timeout", "oom", "error",
+                                                       "rejected_input"}
+    for jid, r in failed.items():
+        row = table_line(section, f"| {r['status']} |", f"| {jid} |")
+        assert r["message"] and r["message"] in row
+    assert "SIGSEGV" in md or "Segmentation fault" in md
+
+
+def _wrong(r):
+    """Does an ok result break the report's accuracy tolerances? (Restated from the raw
+    numbers, independently of tables.accuracy_problems.)"""
+    acc = r.get("accuracy") or {}
+    inside, dist = acc.get("inside") or {}, acc.get("distance") or {}
+    return (inside.get("wrong_far", 0) > 0 or (dist.get("rel_error") or {}).get("max", 0) > 1e-5
+            or dist.get("sign_wrong", 0) > 0 or dist.get("non_finite", 0) > 0)
+
+
+def test_accuracy_warnings_come_first_and_name_the_wrong_jobs(report):
+    md = read(report / "report.md")
+    assert md.index("## Accuracy warnings") < md.index("## The paper's tables")
+    warnings = md.split("## Accuracy warnings")[1].split("\n## ")[0]
+    listed = {cells(l)[-1] for l in warnings.splitlines() if l.startswith("| ") and "__" in l}
+    expected = {jid for jid, r in RESULTS.items() if r["status"] == "ok" and _wrong(r)}
+    assert listed == expected
+    # The fixture's approximate method is accused, on a model and on a stress case, of each
+    # kind of problem; the exact methods are not.
+    assert "openvdb:voxel=3" in warnings and "far from the surface" in warnings
+    assert "distance error up to" in warnings and "distances with the wrong sign" in warnings
+    assert "| spot_open |" in warnings
+    for exact in ("ebp_octree", "cgal_aabb", "embree", "brute_force"):
+        assert f"| {exact}" not in warnings
+
+
+def test_stability_matrix_csv_and_md(report, tmp_path):
+    csv_text = read(report / "stability.csv")
+    assert csv_text.splitlines()[0].startswith("query,method,mesh,status")
+    for case in STRESS_CASES:
+        assert f",{case}," in csv_text
+    assert "cow" not in csv_text and "fandisk" not in csv_text
+    assert ",rejected_input," in csv_text and ",ok_wrong," in csv_text and ",oom," in csv_text
+    md = read(report / "stability.md")
+    assert "**rejected_input**" in md and "**oom**" in md and "**wrong**" in md
+    # One matrix: the command-line tool writes the same CSV from the same results.
+    tool = os.path.join(ROOT, "tools", "stability_matrix.py")
+    proc = subprocess.run([sys.executable, tool, str(report.parent), "--out", str(tmp_path)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert read(tmp_path / "stability_matrix.csv") == csv_text
+    # report.md shows the matrix too, with the same cells.
+    matrix = md.split("## Every cell")[0].split("| inside \\ mesh |", 1)[1]
+    assert matrix in read(report / "report.md")
+
+
+def test_missing_runs_dir_is_a_clear_error(tmp_path):
+    proc = run_report(tmp_path)
+    assert proc.returncode == 2
+    assert "runs" in proc.stderr and "Traceback" not in proc.stderr
+    proc = run_report(tmp_path / "nonexistent")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_empty_runs_dir_is_a_clear_error(tmp_path):
+    (tmp_path / "runs").mkdir()
+    proc = run_report(tmp_path)
+    assert proc.returncode == 2
+    assert "no result files" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_sparse_and_broken_results_do_not_break_the_report(tmp_path):
+    """Only failed jobs, a job without optional blocks, and an unreadable file."""
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (runs / "broken.json").write_text("{not json")
+    (runs / "failed.json").write_text(json.dumps({
+        "schema": "bvhbench.result/1", "status": "crash", "message": "signal 6",
+        "job": {"method": "newmethod", "query": "inside",
+                "mesh": {"name": "cow", "triangles": 5804}, "queries": {"kind": "haptic"}}}))
+    (runs / "bare.json").write_text(json.dumps({
+        "status": "ok", "accuracy": None,
+        "job": {"method": "newmethod", "query": "distance",
+                "mesh": {"name": "cow", "triangles": 5804}, "queries": {"kind": "random", "n": 10}},
+        "queries": {"throughput_qps": {"median": 1000.0}}}))
+    # No method of today's runner declines a query type; a status row as run_job writes it.
+    unsupported = json.loads(json.dumps(RESULTS["cow__random-n500-s1__inside__fault_mode=crash"]))
+    unsupported.update(status="unsupported", message="fault does not answer inside queries")
+    (runs / "unsupported.json").write_text(json.dumps(unsupported))
+    proc = run_report(tmp_path, "--strict")
+    assert proc.returncode == 0, proc.stderr
+    md = read(tmp_path / "report" / "report.md")
+    assert "signal 6" in md and "broken.json" in md and "Not drawn" in md
+    assert "| unsupported |" in md and "fault does not answer inside queries" in md
+    assert "Not checked (no oracle): 1 ok job(s)" in md
+
+
+def test_pareto_front():
+    pts = [(0.0, 10, "a"), (0.0, 20, "b"), (1e-3, 50, "c"), (1e-2, 40, "d"), (1e-1, 60, "e")]
+    front = metrics.pareto_front(pts, "lower", "higher")
+    assert [p[2] for p in front] == ["b", "c", "e"]
+
+
+def test_every_metric_declares_a_direction():
+    for m in metrics.METRICS.values():
+        assert m.better in ("higher", "lower") and m.unit
+
+
+def test_representative_config_prefers_defaults(tmp_path):
+    rs = results_io.load(FIXTURE)
+    reps = results_io.representative_configs(rs.model_jobs())
+    # ebp_octree ran its defaults; openvdb did not: voxel=3 ran on both models, 1.5 on one.
+    assert reps["ebp_octree"] == "" and reps["openvdb"] == "voxel=3"
+    assert rs.stress_meshes == STRESS_CASES
+
+
+def _job(mesh, status, method="m"):
+    return results_io.Job({"status": status, "job": {
+        "method": method, "query": "inside", "mesh": {"name": mesh, "triangles": 100},
+        "queries": {"kind": "random"}}}, f"{mesh}.json")
+
+
+def test_stress_suite_recognised_by_its_failures():
+    """Meshes with unremarkable names, most of whose jobs fail: a stress suite."""
+    jobs = [_job(m, s) for m in ("a", "b", "c", "d") for s in ("ok", "crash", "timeout")]
+    rs = results_io.ResultSet("/tmp/suite", jobs, [], [])
+    assert rs.stress_meshes == {"a", "b", "c", "d"}
+    # One failure among many ok jobs does not make a stress suite.
+    jobs = [_job(m, "ok") for m in ("a", "b", "c", "d") for _ in range(5)] + [_job("a", "crash")]
+    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == set()
+    # The suite's name says so.
+    assert results_io.ResultSet("/tmp/stability", jobs, [], []).stress_meshes == {"a", "b", "c",
+                                                                                  "d"}
+
+
+def test_stress_mesh_known_by_metadata():
+    """A result whose mesh carries a stress tag (the runner writes none today; a mesh made
+    elsewhere may) is a stress case whatever its name."""
+    tagged = _job("spot_noisy", "ok")
+    tagged.raw["job"]["mesh"]["family"] = "stress"
+    jobs = [tagged] + [_job(m, "ok") for m in ("cow", "fandisk")]
+    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == {"spot_noisy"}
+
+
+def test_unknown_methods_get_a_stable_colour():
+    import style
+    assert style.method_color("ebp_octree") == style.METHOD_COLORS["ebp_octree"]
+    assert style.method_color("my_new_bvh") == style.method_color("my_new_bvh")
+    assert style.method_color("my_new_bvh").startswith("#")
+
+
+def test_coherent_peer_is_compared_with_the_coherent_ebp_variant(report):
+    """A path-coherent peer row's ratio uses the EBP-Octree's coherent variant (same coherence on
+    both sides), not its default: cow haptic inside, EBP coherent / Embree coherent."""
+    peer = qps("cow__haptic-n500-s1__inside__embree_coherent=true")
+    coherent = fmt.ratio(qps("cow__haptic-n500-s1__inside__ebp_octree_coherent=true") / peer)
+    default = fmt.ratio(qps("cow__haptic-n500-s1__inside__ebp_octree") / peer)
+    assert coherent != default, "the fixture cannot tell the two apart; regenerate it"
+    md = read(report / "paper_table.md")
+    line = table_line(md, "| cow", "embree:coherent=true", "×")
+    assert cells(line)[4] == coherent, line
+
+
+def test_median_is_the_harness_median():
+    """One median for tables, charts and the representative configuration, computed as the
+    harness computes its own (the middle two averaged)."""
+    assert results_io.median([3.0, None, 1.0, 2.0]) == 2.0
+    assert results_io.median([4.0, 1.0, 2.0, 3.0]) == 2.5
+    assert results_io.median([None]) is None and results_io.median([]) is None
+
+
+def test_non_finite_distances_are_wrong_answers():
+    """The harness keeps NaN and infinite distances out of the error statistics, so a job that
+    answered only NaN has no error to speak of: it must be flagged by its count."""
+    import tables
+    job = results_io.Job({"status": "ok", "job": {"method": "m", "query": "distance"},
+                          "accuracy": {"distance": {"rel_error": {"max": 0.0, "p99": 0.0},
+                                                    "sign_wrong": 0, "non_finite": 3}}}, "m.json")
+    assert tables.accuracy_problems(job) == ["3 non-finite distances (NaN or infinite)"]
