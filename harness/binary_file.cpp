@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 
 #include "errors.hpp"
 
@@ -20,6 +21,9 @@ InputFile::InputFile(const std::string& path) : path_(path) {
   size_ = std::uint64_t(st.st_size);
 }
 
+InputFile::InputFile(std::string_view data, std::string name)
+    : path_(std::move(name)), data_(data.data()), size_(data.size()) {}
+
 InputFile::~InputFile() {
   if (f_) std::fclose(f_);
 }
@@ -28,6 +32,10 @@ void InputFile::read_at(std::uint64_t offset, void* out, std::size_t n, const st
   if (offset > size_ || n > size_ - offset)
     throw file_error(path_, "truncated (" + what + " extends past the end of the file)");
   if (n == 0) return;
+  if (!f_) {
+    std::memcpy(out, data_ + offset, n);
+    return;
+  }
   if (fseeko(f_, off_t(offset), SEEK_SET) != 0 || std::fread(out, 1, n, f_) != n)
     throw file_error(path_, "read error in " + what);
 }

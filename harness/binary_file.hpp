@@ -6,19 +6,23 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace bvhbench {
 
-/// A regular file opened for reading. Errors are InputError naming the file.
+/// A regular file opened for reading, or bytes in memory read as if they were one (fuzzing,
+/// tests): the readers above it cannot tell the two apart. Errors are InputError naming the file.
 class InputFile {
  public:
   /// Throws InputError: "file not found", "not a regular file", "cannot open: <why>".
   explicit InputFile(const std::string& path);
+  /// Bytes in memory, not copied: `data` must outlive the InputFile. `name` names it in messages.
+  InputFile(std::string_view data, std::string name);
   ~InputFile();
   InputFile(const InputFile&) = delete;
   InputFile& operator=(const InputFile&) = delete;
 
-  const std::string& path() const { return path_; }
+  const std::string& path() const { return path_; }  ///< or the name given for bytes in memory
   std::uint64_t size() const { return size_; }  ///< bytes, when opened
 
   /// Reads exactly `n` bytes at `offset`; throws InputError "truncated (`what` extends past the
@@ -27,7 +31,8 @@ class InputFile {
 
  private:
   std::string path_;
-  std::FILE* f_ = nullptr;
+  std::FILE* f_ = nullptr;       // null for bytes in memory
+  const char* data_ = nullptr;   // bytes in memory
   std::uint64_t size_ = 0;
 };
 

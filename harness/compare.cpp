@@ -17,6 +17,7 @@
 
 #include "commands.hpp"
 #include "errors.hpp"
+#include "json_input.hpp"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -168,17 +169,16 @@ json read_result_file(const std::string& file) {
   if (!f) throw file_error(file, "cannot read");
   std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (f.bad()) throw file_error(file, "read failed");
-  json r;
-  try {
-    r = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw file_error(file, std::string("malformed JSON: ") + e.what());
-  }
-  validate_result(file, r);
-  return r;
+  return parse_result(text, file);
 }
 
 }  // namespace
+
+json parse_result(const std::string& text, const std::string& file) {
+  json r = parse_json_input(text, file);
+  validate_result(file, r);
+  return r;
+}
 
 ResultSet load_result_set(const std::string& path) {
   ResultSet set;
@@ -246,7 +246,7 @@ std::string job_label(const json& r) {
   std::string q = str(at(r, {"job", "queries", "kind"}));
   if (q.empty()) q = fs::path(str(at(r, {"job", "queries", "path"}), "?")).stem().string();
   const json& n = at(r, {"job", "queries", "n"});
-  if (n.is_number()) q += "-n" + std::to_string(n.get<long long>());
+  if (n.is_number()) q += "-n" + show(n);  // not get<long long>(): a float beyond its range is undefined
   std::string spec = str(at(r, {"job", "method_spec"}), str(at(r, {"job", "method"})));
   return mesh + "__" + q + "__" + str(at(r, {"job", "query"}), "?") + "__" + spec;
 }
@@ -416,7 +416,8 @@ json side_info(const ResultSet& s) {
     std::string h = str(at(r, {"context", "host"}));
     if (!h.empty()) hosts.insert(h);
     std::string c = str(at(r, {"context", "git_commit"}));
-    if (!c.empty()) commits.insert(c.substr(0, 12) + (at(r, {"context", "git_dirty"}) == json(true) ? "+dirty" : ""));
+    // printable(): a cut may split a UTF-8 sequence, and the set goes into the JSON report.
+    if (!c.empty()) commits.insert(printable(c.substr(0, 12)) + (at(r, {"context", "git_dirty"}) == json(true) ? "+dirty" : ""));
     std::string cpu = str(at(r, {"context", "cpu_model"}));
     if (!cpu.empty()) cpus.insert(cpu);
   }
@@ -469,8 +470,8 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
         return;
       }
       inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " +
-                (x.is_string() ? x.get<std::string>().substr(0, 16) : x.dump()) + " -> " +
-                (y.is_string() ? y.get<std::string>().substr(0, 16) : y.dump());
+                (x.is_string() ? printable(x.get<std::string>().substr(0, 16)) : x.dump()) + " -> " +
+                (y.is_string() ? printable(y.get<std::string>().substr(0, 16)) : y.dump());
     };
     differs({"job", "mesh", "sha256"}, "mesh sha256", false);
     differs({"job", "queries", "sha256"}, "query-set sha256", false);
@@ -725,7 +726,7 @@ std::string compare_markdown(const json& rep) {
     if (why.empty() && p.contains("status") && p["status"]["new"] != "ok")
       why = "status " + p["status"]["new"].get<std::string>() + " (as in BASE)";
     if (t.is_object() && t.contains("note")) why += (why.empty() ? "" : "; ") + t["note"].get<std::string>();
-    if (why.size() > 300) why = why.substr(0, 297) + "...";
+    if (why.size() > 300) why = printable(why.substr(0, 297)) + "...";
     std::string qps = "-", change = "-", pv = "-";
     if (t.is_object()) {
       qps = qps_text(t["base_qps_median"]) + " -> " + qps_text(t["new_qps_median"]);

@@ -53,6 +53,9 @@ struct ResultSet {
 /// Reads and validates a result set. Throws InputError (exit 2) for a missing or empty folder,
 /// an unreadable file, malformed JSON, or a file that is not a bvhbench result.
 ResultSet load_result_set(const std::string& path);
+/// Parses and validates the text of one result file (`file` names it in messages), as
+/// load_result_set does for each. Throws InputError: malformed JSON, not a bvhbench result.
+nlohmann::json parse_result(const std::string& text, const std::string& file);
 
 struct CompareOptions {
   double threshold = 0.10;   ///< relative throughput change that matters (0.10 = 10%)

@@ -354,6 +354,7 @@ std::string NpyArray::unicode_value(std::size_t i) const {
     std::uint32_t cp = 0;
     for (int k = 3; k >= 0; --k) cp = cp << 8 | static_cast<unsigned char>(data[j + k]);
     if (cp == 0) break;  // NumPy pads with NULs
+    if ((cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) cp = 0xFFFD;  // not encodable in UTF-8
     if (cp < 0x80) {
       out += char(cp);
     } else if (cp < 0x800) {
@@ -376,7 +377,8 @@ std::string NpyArray::unicode_value(std::size_t i) const {
 // ---------------------------------------------------------------------------------------------
 // .npy
 // ---------------------------------------------------------------------------------------------
-NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name, NpyOrder order) {
+NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name, NpyOrder order,
+                       NpySize size_is) {
   // The header is read in the pieces parse_header asks for: 12 bytes hold the length field of
   // any version, then the whole dict.
   std::string head;
@@ -396,20 +398,34 @@ NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std:
   if (have != need)
     throw file_error(name, (have < need ? "truncated: " : "") + std::to_string(have) + " bytes of data, but dtype " +
                                h.dtype + " and shape " + shape_string(h.shape) + " need " + std::to_string(need));
-  a.data.resize(need);
-  read(a.data.data(), need);
+  constexpr std::size_t kFirstPiece = std::size_t(64) << 20;
+  if (size_is == NpySize::present || need <= kFirstPiece) {
+    a.data.resize(need);
+    read(a.data.data(), need);
+  } else {
+    // Each piece as large as what arrived before it: at most one more copy of the data, and a
+    // source that ends early throws before the buffer outgrows twice what it delivered.
+    for (std::size_t done = 0; done < need;) {
+      const std::size_t piece = std::min(need - done, std::max(done, kFirstPiece));
+      a.data.resize(done + piece);
+      read(a.data.data() + done, piece);
+      done += piece;
+    }
+  }
   normalise_byte_order(a);
   return a;
 }
 
-NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name) {
+NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name, NpyOrder order) {
   std::size_t at = 0;
   return read_npy_from(
       [&](void* out, std::size_t k) {
-        std::memcpy(out, bytes + at, k);  // read_npy_from never asks for more than n in all
+        // read_npy_from never asks for more than n in all; for an empty array it asks for 0
+        // bytes into an empty buffer, whose data() may be null (memcpy's arguments may not).
+        if (k > 0) std::memcpy(out, bytes + at, k);
         at += k;
       },
-      n, name);
+      n, name, order);
 }
 
 NpyArray read_npy(const std::string& path, NpyOrder order) {
@@ -471,15 +487,23 @@ std::vector<Vec3d> points_of(const NpyArray& a, const std::string& path) {
   }
   return pts;
 }
-}  // namespace
 
-std::vector<Vec3d> read_points_npy(const std::string& path) {
-  const NpyArray a = read_npy(path, NpyOrder::c_or_fortran);
+/// The points of an array read with NpyOrder::c_or_fortran.
+std::vector<Vec3d> points_of_array(const NpyArray& a, const std::string& path) {
   const bool f8 = a.dtype == "<f8", f4 = a.dtype == "<f4";
   if (!(f8 || f4) || a.shape.size() != 2 || a.shape[1] != 3)
     throw file_error(path, "expected a float64 or float32 (N, 3) array of points, found dtype " + a.dtype +
                                " and shape " + shape_string(a.shape));
   return f8 ? points_of<double>(a, path) : points_of<float>(a, path);
+}
+}  // namespace
+
+std::vector<Vec3d> read_points_npy(const std::string& path) {
+  return points_of_array(read_npy(path, NpyOrder::c_or_fortran), path);
+}
+
+std::vector<Vec3d> parse_points_npy(const char* bytes, std::size_t n, const std::string& name) {
+  return points_of_array(parse_npy(bytes, n, name, NpyOrder::c_or_fortran), name);
 }
 
 }  // namespace bvhbench

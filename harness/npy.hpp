@@ -35,6 +35,8 @@ struct NpyArray {
   /// holding the UTF-8 string `s` as UTF-32LE, as NumPy stores str values.
   static NpyArray unicode(const std::string& s);
   /// Element i of a "<U*" array as UTF-8, trailing NUL padding dropped ("" if not unicode).
+  /// Always valid UTF-8 (it may go into a result JSON): a code unit that is no Unicode scalar
+  /// value (a surrogate, or above U+10FFFF) reads as U+FFFD, the replacement character.
   std::string unicode_value(std::size_t i = 0) const;
 };
 
@@ -45,13 +47,21 @@ enum class NpyOrder { c_only, c_or_fortran };
 /// A sequential source of bytes: must copy exactly the next `n` bytes to `out`, or throw.
 using NpyByteSource = std::function<void(void* out, std::size_t n)>;
 
+/// Whether the `size` given to read_npy_from is known to be there (a file's size, a stored ZIP
+/// entry's, bytes in memory) or only claimed by a header (the plain size of a deflated ZIP entry,
+/// which a corrupt directory can make about 1000 times what the entry really inflates to).
+enum class NpySize { present, claimed };
+
 /// Reads one .npy of `size` bytes from `read`; `name` is used in error messages. The data goes
-/// straight into the array's buffer. Throws InputError (bad magic, bad header, unsupported
-/// dtype, size that does not match the shape, ...).
+/// straight into the array's buffer; for a claimed size, the buffer grows as the bytes arrive
+/// (from 64 MiB, doubling), so that a lying header cannot make the reader allocate much more than
+/// the source delivers. Throws InputError (bad magic, bad header, unsupported dtype, size that
+/// does not match the shape, ...).
 NpyArray read_npy_from(const NpyByteSource& read, std::uint64_t size, const std::string& name,
-                       NpyOrder order = NpyOrder::c_only);
+                       NpyOrder order = NpyOrder::c_only, NpySize size_is = NpySize::present);
 /// Parses .npy bytes; `name` is used in error messages. Throws InputError.
-NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name);
+NpyArray parse_npy(const char* bytes, std::size_t n, const std::string& name,
+                   NpyOrder order = NpyOrder::c_only);
 NpyArray read_npy(const std::string& path, NpyOrder order = NpyOrder::c_only);
 
 /// The header that a .npy of `a` starts with (magic, version, dict, padding to 64 bytes), as
@@ -66,5 +76,7 @@ void write_npy(const std::string& path, const NpyArray& a);
 /// C or Fortran order, in the file's row order. Throws InputError naming the file if it is not
 /// one, or if a value is NaN or infinite (naming the point).
 std::vector<Vec3d> read_points_npy(const std::string& path);
+/// The same for .npy bytes in memory; `name` names them in messages.
+std::vector<Vec3d> parse_points_npy(const char* bytes, std::size_t n, const std::string& name);
 
 }  // namespace bvhbench

@@ -7,8 +7,10 @@
 
 namespace bvhbench {
 
-std::map<std::string, NpyArray> read_npz(const std::string& path) {
-  ZipReader zip(path);
+namespace {
+
+std::map<std::string, NpyArray> read_arrays(ZipReader& zip) {
+  const std::string& path = zip.path();
   std::map<std::string, NpyArray> out;
   for (const ZipEntry& z : zip.entries()) {
     if (!z.name.empty() && z.name.back() == '/') continue;  // a directory
@@ -17,11 +19,26 @@ std::map<std::string, NpyArray> read_npz(const std::string& path) {
     else continue;  // np.load only exposes .npy members as arrays
     if (out.count(key)) throw file_error(path, "duplicate entry " + quoted_excerpt(z.name, 100));
     ZipReader::EntryReader entry = zip.open(z);
-    NpyArray a = read_npy_from([&](void* dst, std::size_t n) { entry.read(dst, n); }, entry.size(), entry.where());
+    // A deflated entry's plain size is only what the directory says (zip.hpp bounds it to ~1000x
+    // the compressed size): the array grows as it inflates rather than being allocated for it.
+    NpyArray a = read_npy_from([&](void* dst, std::size_t n) { entry.read(dst, n); }, entry.size(), entry.where(),
+                               NpyOrder::c_only, z.method == 8 ? NpySize::claimed : NpySize::present);
     entry.finish();
     out.emplace(key, std::move(a));
   }
   return out;
+}
+
+}  // namespace
+
+std::map<std::string, NpyArray> read_npz(const std::string& path) {
+  ZipReader zip(path);
+  return read_arrays(zip);
+}
+
+std::map<std::string, NpyArray> parse_npz(std::string_view bytes, const std::string& name, bool verify_crc) {
+  ZipReader zip(bytes, name, verify_crc);
+  return read_arrays(zip);
 }
 
 void write_npz(const std::string& path, const std::map<std::string, NpyArray>& arrays) {

@@ -100,7 +100,8 @@ std::string normalise(const std::string& method, const ParamSpec& p, const std::
 Params Params::resolve(const std::string& method, const std::vector<ParamSpec>& specs,
                        const std::map<std::string, std::string>& given) {
   Params out;
-  for (auto& [k, v] : given) {
+  for (auto& kv : given) {
+    const std::string& k = kv.first;  // a structured binding: a lambda may not capture it (C++17; clang refuses)
     auto it = std::find_if(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.name == k; });
     if (it == specs.end()) {
       std::string known;

@@ -108,12 +108,9 @@ class PointLines {
   std::vector<Vec3d> points_;
 };
 
-}  // namespace
-
-std::vector<Vec3d> read_points_text(const std::string& path) {
-  InputFile f(path);
-  PointLines lines(path);
-  std::vector<char> buf(std::size_t(1) << 20);
+std::vector<Vec3d> read_lines(InputFile& f, std::size_t piece_bytes) {
+  PointLines lines(f.path());
+  std::vector<char> buf(std::max<std::size_t>(piece_bytes, 1));
   std::string carry;  // the start of a line that continues in the next piece
   std::uint64_t number = 0;
   auto too_long = [&] { lines.fail(number + 1, "longer than " + std::to_string(kMaxLine) + " bytes (not a text file of points?)"); };
@@ -142,6 +139,18 @@ std::vector<Vec3d> read_points_text(const std::string& path) {
   }
   if (!carry.empty()) lines.take(carry, ++number);
   return lines.finish();
+}
+
+}  // namespace
+
+std::vector<Vec3d> read_points_text(const std::string& path) {
+  InputFile f(path);
+  return read_lines(f, std::size_t(1) << 20);
+}
+
+std::vector<Vec3d> parse_points_text(std::string_view text, const std::string& name, std::size_t piece_bytes) {
+  InputFile f(text, name);
+  return read_lines(f, piece_bytes);
 }
 
 }  // namespace bvhbench

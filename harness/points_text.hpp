@@ -16,7 +16,9 @@
 /// Refused, as InputError naming the file and the line: a value that is not a number, a missing
 /// or empty value, a column count that differs from the first point's, a NaN or infinite
 /// coordinate, a line longer than 64 KiB; and a file with no point at all.
+#include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geometry.hpp"
@@ -25,5 +27,10 @@ namespace bvhbench {
 
 /// The points of the text file at `path`, in order (N x 3, as written).
 std::vector<Vec3d> read_points_text(const std::string& path);
+/// The same for text in memory; `name` names it in messages. The text is split into lines in
+/// pieces of `piece_bytes` (as a file is read), so that a test can make lines straddle pieces:
+/// the points and the errors do not depend on it.
+std::vector<Vec3d> parse_points_text(std::string_view text, const std::string& name,
+                                     std::size_t piece_bytes = std::size_t(1) << 20);
 
 }  // namespace bvhbench

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,7 @@
 #include "commands.hpp"
 #include "correctly_rounded.hpp"
 #include "errors.hpp"
+#include "json_input.hpp"
 #include "mesh.hpp"
 #include "npy.hpp"
 #include "points_text.hpp"
@@ -66,20 +68,27 @@ QuerySet load_query_set(const std::string& points_path) {
     q.meta = {{"kind", "file"}, {"n", q.points.size()}, {"format", ext.substr(1)}, {"ordered", true}};
     return q;
   }
-  std::ifstream f(side);
+  std::ifstream f(side, std::ios::binary);
   if (!f) throw file_error(side, "cannot read the sidecar JSON of query set " + points_path);
-  try {
-    q.meta = nlohmann::json::parse(f);
-  } catch (const std::exception& e) {
-    throw file_error(side, std::string("malformed JSON: ") + e.what());
-  }
-  if (!q.meta.is_object()) throw file_error(side, "sidecar is not a JSON object");
-  for (const char* key : {"kind", "n", "seed"})
-    if (!q.meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
-  if (!q.meta["n"].is_number_integer() || q.meta["n"].get<long long>() != (long long)q.points.size())
-    throw file_error(side, "n = " + q.meta["n"].dump() + " does not match the " +
-                               std::to_string(q.points.size()) + " points of " + points_path);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  q.meta = parse_sidecar(text, side, points_path, q.points.size());
   return q;
+}
+
+nlohmann::json parse_sidecar(std::string_view text, const std::string& side, const std::string& points_path,
+                             std::size_t n_points) {
+  nlohmann::json meta = parse_json_input(text, side);
+  if (!meta.is_object()) throw file_error(side, "sidecar is not a JSON object");
+  for (const char* key : {"kind", "n", "seed"})
+    if (!meta.contains(key)) throw file_error(side, std::string("missing key '") + key + "'");
+  // The runner reads the kind as a string (QuerySet::kind()).
+  if (!meta["kind"].is_string())
+    throw file_error(side, std::string("kind must be a string, not ") + meta["kind"].type_name());
+  const nlohmann::json& n = meta["n"];
+  if (!n.is_number_integer() || n.get<long long>() != (long long)n_points)
+    throw file_error(side, "n = " + (n.is_number() ? n.dump() : std::string("(") + n.type_name() + ")") +
+                               " does not match the " + std::to_string(n_points) + " points of " + points_path);
+  return meta;
 }
 
 void write_query_set(const std::string& npy_path, const std::vector<Vec3d>& points,

@@ -11,6 +11,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -40,6 +41,11 @@ std::vector<Vec3d> read_query_points(const std::string& path);
 /// problem (a malformed points file, a sidecar with bad JSON, without kind/n/seed, or with an n
 /// that does not match).
 QuerySet load_query_set(const std::string& points_path);
+/// Parses and checks the sidecar JSON `text` of the query set `points_path`, which holds
+/// `n_points` points; `side` names the sidecar in messages. Returns the sidecar (a JSON object
+/// with a string kind, n = n_points and a seed). Throws InputError naming `side` and the problem.
+nlohmann::json parse_sidecar(std::string_view text, const std::string& side, const std::string& points_path,
+                             std::size_t n_points);
 /// Writes Q.npy and Q.json atomically; meta gets n and (if missing) created_by.
 void write_query_set(const std::string& npy_path, const std::vector<Vec3d>& points,
                      nlohmann::json meta);

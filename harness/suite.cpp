@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -105,6 +106,8 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
       axes.push_back({kv.first.as<std::string>(), vals});
     }
     for (auto& [k, vals] : axes) {
+      if (specs.size() * vals.size() > kMaxSuiteJobs)
+        yaml_error(file, n, "the parameter sweep makes more than " + std::to_string(kMaxSuiteJobs) + " variants");
       std::vector<std::string> next;
       for (auto& s : specs)
         for (auto& v : vals) next.push_back(s + (s.empty() ? "" : ",") + k + "=" + v);
@@ -143,16 +146,19 @@ QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const f
 }  // namespace
 
 SuiteConfig load_suite(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw file_error(path, "cannot read suite file");
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return parse_suite(text, path);
+}
+
+namespace {
+
+/// The suite of the YAML document `root` of the file `path` (load_suite). Throws InputError, or a
+/// YAML::Exception where a value of the wrong shape is read (see parse_suite).
+SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
   SuiteConfig cfg;
   cfg.file = path;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw file_error(path, "cannot read suite file");
-  } catch (const YAML::Exception& e) {
-    throw file_error(path, std::string("malformed YAML: ") + e.what());
-  }
   if (!root.IsMap()) throw file_error(path, "a suite is a YAML map (see suites/README.md)");
   const fs::path base = fs::path(path).parent_path();
   try {
@@ -166,12 +172,16 @@ SuiteConfig load_suite(const std::string& path) {
   }
   if (cfg.repeat < 1) throw file_error(path, "repeat must be >= 1");
   if (!(cfg.timeout_s > 0)) throw file_error(path, "timeout_s must be > 0");
+  // The child's address-space limit is set from it (0: none).
+  if (!(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb)))
+    throw file_error(path, "memory_limit_mb must be a number of MiB >= 0 (0 = no limit)");
   auto matrices = root["matrices"];
   if (!matrices || !matrices.IsSequence() || matrices.size() == 0)
     throw file_error(path, "missing 'matrices:' (a list of {meshes, queries, query, methods})");
 
   std::set<std::string> seen;
   std::map<std::string, std::string> query_files;  // label -> file, across matrices
+  double expanded = 0;                              // jobs of the matrices so far, duplicates included
   for (auto m : matrices) {
     if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
     for (const char* key : {"meshes", "queries", "methods"})
@@ -233,7 +243,11 @@ SuiteConfig load_suite(const std::string& path) {
         // Validate now: a typo in a suite is bad input, not 40 failed jobs.
         std::string name;
         std::map<std::string, std::string> given;
-        parse_method_spec(s, &name, &given);
+        try {
+          parse_method_spec(s, &name, &given);
+        } catch (const InputError& e) {
+          yaml_error(path, n, e.what());
+        }
         const MethodInfo* info = Registry::global().find(name);
         if (!info) {
           try {
@@ -248,7 +262,14 @@ SuiteConfig load_suite(const std::string& path) {
           yaml_error(path, n, e.what());
         }
         methods.push_back(s);
+        if (methods.size() > kMaxSuiteJobs)
+          yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
       }
+    // Before the product is made: its size, in floating point since it may not fit in 64 bits.
+    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size());
+    if (expanded > double(kMaxSuiteJobs))
+      yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
+                              " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
     for (auto& mesh : meshes)
       for (auto& q : queries)
         for (auto t : types)
@@ -264,6 +285,24 @@ SuiteConfig load_suite(const std::string& path) {
           }
   }
   return cfg;
+}
+
+}  // namespace
+
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("malformed YAML: ") + e.what());
+  }
+  // A value of the wrong shape where a string or a number is read (a map as a mesh path, a list
+  // as a parameter name) is bad input like any other; yaml-cpp's message names its line.
+  try {
+    return expand_suite(root, path);
+  } catch (const YAML::Exception& e) {
+    throw file_error(path, std::string("bad value: ") + e.what());
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -418,7 +457,9 @@ ChildOutcome run_child(const std::vector<std::string>& args, double timeout_s, d
     if (getppid() != parent) _exit(127);
     if (memory_limit_mb > 0) {
       rlimit rl;
-      rl.rlim_cur = rl.rlim_max = rlim_t(memory_limit_mb * 1024.0 * 1024.0);
+      // A limit beyond what rlim_t holds is no limit (converting it would be undefined).
+      const double bytes = memory_limit_mb * 1024.0 * 1024.0;
+      rl.rlim_cur = rl.rlim_max = bytes < 0x1p63 ? rlim_t(bytes) : RLIM_INFINITY;
       setrlimit(RLIMIT_AS, &rl);
     }
     rlimit core{0, 0};

@@ -48,8 +48,17 @@ struct SuiteConfig {
   std::vector<JobPlan> jobs;
 };
 
+/// The most jobs a suite may expand to (meshes x query sets x queries x method variants, summed
+/// over its matrices, before duplicates are dropped). A few hundred bytes of parameter sweeps or
+/// aliased matrices can ask for millions, which would take the loader minutes and gigabytes only
+/// to list; our largest suite has about 600.
+inline constexpr std::size_t kMaxSuiteJobs = 100000;
+
 /// Parses and expands a suite file. Throws InputError naming the file and the problem.
 SuiteConfig load_suite(const std::string& path);
+/// The same for the suite text `yaml` of the file `path` (which names it in messages; relative
+/// paths in it are resolved against its folder). Reads no file.
+SuiteConfig parse_suite(const std::string& yaml, const std::string& path);
 
 /// The flat summary row of one result (also used by compare and tests).
 std::vector<std::string> summary_header();

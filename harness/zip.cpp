@@ -10,6 +10,7 @@
 #include <cstring>
 #include <new>
 #include <stdexcept>
+#include <utility>
 
 #include "errors.hpp"
 
@@ -137,6 +138,8 @@ std::vector<ZipEntry> read_central_directory(InputFile& f) {
 // Reading
 // ---------------------------------------------------------------------------------------------
 ZipReader::ZipReader(const std::string& path) : file_(path), entries_(read_central_directory(file_)) {}
+ZipReader::ZipReader(std::string_view data, std::string name, bool verify_crc)
+    : file_(data, std::move(name)), entries_(read_central_directory(file_)), verify_crc_(verify_crc) {}
 
 struct ZipReader::EntryReader::Inflate {
   z_stream z{};
@@ -153,11 +156,13 @@ struct ZipReader::EntryReader::Inflate {
   Inflate& operator=(const Inflate&) = delete;
 };
 
-ZipReader::EntryReader::EntryReader(InputFile& file, const ZipEntry& entry, std::uint64_t data_start)
+ZipReader::EntryReader::EntryReader(InputFile& file, const ZipEntry& entry, std::uint64_t data_start,
+                                    bool verify_crc)
     : file_(file),
       entry_(entry),
       where_(file.path() + " (entry " + quoted_excerpt(entry.name, 100) + ")"),
-      data_start_(data_start) {
+      data_start_(data_start),
+      verify_crc_(verify_crc) {
   if (entry_.method == 8) inflate_ = std::make_unique<Inflate>();
 }
 
@@ -223,7 +228,7 @@ void ZipReader::EntryReader::finish() {
       throw file_error(where_, "the deflate stream inflates to more than the " + std::to_string(entry_.usize) +
                                    " bytes the directory says");
   }
-  if (crc_ != entry_.crc) throw file_error(where_, "CRC-32 mismatch (the file is corrupt)");
+  if (verify_crc_ && crc_ != entry_.crc) throw file_error(where_, "CRC-32 mismatch (the file is corrupt)");
 }
 
 ZipReader::EntryReader ZipReader::open(const ZipEntry& z) {
@@ -243,7 +248,7 @@ ZipReader::EntryReader ZipReader::open(const ZipEntry& z) {
   // Deflate expands at most ~1032:1; a directory that claims more is lying (and would make the
   // reader allocate for it).
   if (z.method == 8 && z.usize > z.csize * 1032 + 1024) throw file_error(where, "corrupt sizes in the central directory");
-  return EntryReader(file_, z, start);
+  return EntryReader(file_, z, start, verify_crc_);
 }
 
 // ---------------------------------------------------------------------------------------------

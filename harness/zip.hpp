@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "binary_file.hpp"
@@ -28,6 +29,10 @@ class ZipReader {
   /// Reads the end record and the central directory; throws InputError if the file is not a ZIP
   /// (saying so when it is a .npy), is truncated or has a corrupt directory.
   explicit ZipReader(const std::string& path);
+  /// The same for a ZIP in memory (not copied: `data` must outlive the reader); `name` names it.
+  /// `verify_crc` false skips the entries' CRC-32 check: only for the fuzzer, so that mutated
+  /// entries reach the reader of their contents instead of dying at a CRC.
+  ZipReader(std::string_view data, std::string name, bool verify_crc = true);
   ZipReader(const ZipReader&) = delete;
   ZipReader& operator=(const ZipReader&) = delete;
 
@@ -58,7 +63,7 @@ class ZipReader {
    private:
     friend class ZipReader;
     struct Inflate;  // zlib's stream state, for deflated entries
-    EntryReader(InputFile& file, const ZipEntry& entry, std::uint64_t data_start);
+    EntryReader(InputFile& file, const ZipEntry& entry, std::uint64_t data_start, bool verify_crc);
     std::size_t inflate_into(unsigned char* out, std::size_t n);
 
     InputFile& file_;
@@ -67,6 +72,7 @@ class ZipReader {
     std::uint64_t data_start_;        ///< of the entry's (compressed) data in the file
     std::uint64_t compressed_read_ = 0, plain_read_ = 0;
     std::uint32_t crc_ = 0;
+    bool verify_crc_ = true;
     std::unique_ptr<Inflate> inflate_;
   };
 
@@ -77,6 +83,7 @@ class ZipReader {
  private:
   InputFile file_;
   std::vector<ZipEntry> entries_;
+  bool verify_crc_ = true;
 };
 
 /// A ZIP file of stored entries, written to PATH.tmp and renamed into place by commit(). The

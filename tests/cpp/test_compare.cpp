@@ -223,3 +223,21 @@ TEST(Compare, MissingNewAndFailed) {
   EXPECT_EQ(rep["summary"]["missing"], 1);
   EXPECT_EQ(rep["summary"]["new"], 1);
 }
+
+// What the report quotes from a result is cut at a byte count: a cut inside a UTF-8 sequence is
+// escaped, so that the JSON report still prints; a job's n that is a float beyond long long is
+// shown as it is, not converted (undefined). Found in review, confirmed with fuzz_compare.
+TEST(Compare, QuotedValuesKeepTheReportPrintable) {
+  json a = result("m", kQps, 0.03), b = result("m", kQps, 0.03);
+  a["job"]["mesh"]["sha256"] = "0123456789abcde\xC3\xA9";  // the 16th byte starts "é"
+  a["context"]["git_commit"] = "0123456789a\xC3\xA9";      // the 12th byte too
+  json rep = compare_result_sets(set_of({a}), set_of({b}), {});
+  ASSERT_NO_THROW((void)rep.dump());
+  EXPECT_EQ(rep["pairs"][0]["reasons"][0]["detail"], "mesh sha256 0123456789abcde\\xC3 -> aa");
+  EXPECT_EQ(rep["base"]["commits"][0], "0123456789a\\xC3");
+  json c = result("m", kQps, 0.03);
+  c["job"].erase("id");
+  c["job"]["queries"]["n"] = 1e300;
+  rep = compare_result_sets(set_of({c}), set_of({c}), {});
+  EXPECT_EQ(rep["pairs"][0]["job"], "cow__random-n1e+300__inside__m");
+}

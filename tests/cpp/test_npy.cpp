@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "errors.hpp"
 #include "npy.hpp"
 #include "npz.hpp"
@@ -116,6 +118,21 @@ TEST(Npy, UnicodeHelper) {
   EXPECT_EQ(NpyArray::f8({1.0}).unicode_value(), "");
 }
 
+// Code units that are no Unicode scalar value (a file may hold any 32-bit value) read as U+FFFD,
+// so that the string is valid UTF-8 in a result JSON (found by fuzz_npy).
+TEST(Npy, UnicodeValueIsValidUtf8) {
+  NpyArray a = NpyArray::unicode("abcd");
+  auto set = [&](int k, std::uint32_t cp) {
+    for (int b = 0; b < 4; ++b) a.data[4 * k + b] = char((cp >> (8 * b)) & 0xff);
+  };
+  set(0, 0xD800);      // a surrogate
+  set(1, 0x110000);    // above U+10FFFF
+  set(2, 0xFFFFFFFF);
+  set(3, 0x10FFFF);    // the last scalar value: kept
+  EXPECT_EQ(a.unicode_value(), "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD\xF4\x8F\xBF\xBF");
+  EXPECT_NO_THROW((void)nlohmann::json(a.unicode_value()).dump());
+}
+
 TEST(Npy, PointsRoundTrip) {
   const std::vector<Vec3d> pts = {{0.1, 0.2, 0.3}, {-1e10, 0, 5e-324}};
   const std::string path = temp_path("points.npy");
@@ -124,6 +141,40 @@ TEST(Npy, PointsRoundTrip) {
   std::ifstream tmp(path + ".tmp");
   EXPECT_FALSE(tmp.good()) << "the temporary file was left behind";
   std::remove(path.c_str());
+}
+
+// Bytes in memory read as a file does, empty arrays included (an empty buffer's data() may be
+// null: the in-memory source must not pass it to memcpy; the fuzzer's UBSan build found it).
+TEST(Npy, ParsesFromMemoryLikeAFile) {
+  for (const std::vector<Vec3d>& pts : {std::vector<Vec3d>{}, std::vector<Vec3d>{{0.1, 0.2, 0.3}, {-1e10, 0, 5e-324}}}) {
+    const std::string bytes = npy_bytes(NpyArray::f8_n3(pts));
+    EXPECT_EQ(parse_points_npy(bytes.data(), bytes.size(), "mem.npy"), pts);
+    const NpyArray a = parse_npy(bytes.data(), bytes.size(), "mem.npy");
+    EXPECT_EQ(a.shape, (std::vector<std::size_t>{pts.size(), 3}));
+    EXPECT_EQ(a.data.size(), 24 * pts.size());
+  }
+}
+
+// A deflated .npz entry's plain size is only claimed by the ZIP directory: read_npy_from must not
+// allocate it before the bytes arrive. Here the header claims 1 TiB of data and the source ends
+// after 1 MiB: an InputError, not std::bad_alloc (or the OOM killer).
+TEST(Npy, AClaimedSizeIsNotAllocatedUpFront) {
+  // What npy_header writes for a float64 array of 2^37 elements (which we cannot make to write it).
+  std::string head = "\x93NUMPY\x01";
+  head += '\0';
+  head += "v";
+  head += '\0';
+  head += "{'descr': '<f8', 'fortran_order': False, 'shape': (137438953472,), }";
+  head.resize(127, ' ');
+  head += '\n';
+  const std::uint64_t claimed = head.size() + (std::uint64_t(1) << 40);
+  std::uint64_t at = 0;
+  const NpyByteSource source = [&](void* out, std::size_t n) {
+    if (at + n > head.size() + (1u << 20)) throw file_error("lying.npz (entry 'a.npy')", "the deflate stream ends early");
+    for (std::size_t i = 0; i < n; ++i, ++at) static_cast<char*>(out)[i] = at < head.size() ? head[at] : '\0';
+  };
+  expect_input_error([&] { read_npy_from(source, claimed, "lying.npz (entry 'a.npy')", NpyOrder::c_only, NpySize::claimed); },
+                     "lying.npz", "ends early");
 }
 
 TEST(Npy, NpzRoundTrip) {

@@ -137,6 +137,12 @@ TEST(QueryFiles, ASidecarIsStillChecked) {
   expect_input_error([&] { load_query_set(path); }, dir.file("probe.json"), "does not match the 2 points");
   write_file_bytes(dir.file("probe.json"), "{\"kind\": \"haptic\", \"n\": 2}");
   expect_input_error([&] { load_query_set(path); }, dir.file("probe.json"), "missing key 'seed'");
+  // The runner reads the kind as a string: anything else is refused here, not a JSON type error
+  // in the job (found in review; fuzz_query_sidecar confirms it).
+  write_file_bytes(dir.file("probe.json"), "{\"kind\": 7, \"n\": 2, \"seed\": 4}");
+  expect_input_error([&] { load_query_set(path); }, dir.file("probe.json"), "kind must be a string, not number");
+  write_file_bytes(dir.file("probe.json"), "{\"kind\": \"haptic\", \"n\": [[2]], \"seed\": 4}");
+  expect_input_error([&] { load_query_set(path); }, dir.file("probe.json"), "n = (array) does not match");
 }
 
 TEST(QueryFiles, OtherExtensionsAreRefused) {

@@ -2,6 +2,7 @@
 bytes changed (0xFF among them, so that header lines stop being UTF-8) are either still valid
 (exit 0) or refused with exit 2, a message that names the file, and a `rejected_input` result."""
 import json
+import os
 import random
 import shutil
 
@@ -77,3 +78,27 @@ def test_a_non_utf8_header_line_is_quoted_escaped(bvhbench, tmp_path, queries):
     assert r["status"] == "rejected_input"
     assert "'flo\\xFFat'" in r["message"] and "'flo\\xFFat'" in p.stderr
     assert str(mesh) in r["message"]
+
+
+def test_non_utf8_bytes_reach_messages_escaped(bvhbench, tmp_path):
+    """A file name and contents that are not UTF-8, through compare, suite and run (text points):
+    exit 2, stderr decodes as UTF-8 (run() decodes strictly), and the file and the quoted bytes
+    are named escaped, in the message and in the result JSON."""
+    ff = os.fsdecode(b"\xff")  # a file name byte that is not UTF-8
+    result = tmp_path / f"r{ff}.json"
+    result.write_bytes(b'{"schema": "bvhbench.result/1", "status": "o\xfek"}')
+    p = run(bvhbench, "compare", result, result, check=2)
+    assert "r\\xFF.json: malformed JSON" in p.stderr, p.stderr
+    suite = tmp_path / f"s{ff}.yml"
+    suite.write_bytes(b"matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    methods: [br\xfeute]\n")
+    p = run(bvhbench, "suite", suite, "--out", tmp_path / "out", "--list", check=2)
+    assert "s\\xFF.yml" in p.stderr and "br\\xFEute" in p.stderr, p.stderr
+    points = tmp_path / f"p{ff}.xyz"
+    points.write_bytes(b"1 2 3\n4 5 \xfe6\n")
+    out = tmp_path / "r.json"
+    p = run(bvhbench, "run", "--mesh", FIXTURES / "good_ascii.ply", "--method", "brute_force", "--queries", points,
+            "--out", out, check=2)
+    r = json.loads(out.read_text(encoding="utf-8"))
+    assert r["status"] == "rejected_input"
+    assert "p\\xFF.xyz: line 2: '\\xFE6' in column 3 is not a number" in r["message"], r["message"]
+    assert "p\\xFF.xyz" in p.stderr

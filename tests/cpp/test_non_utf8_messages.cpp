@@ -1,0 +1,140 @@
+// Non-UTF-8 bytes in every reader's error paths: the file's name and the bytes quoted from it
+// reach the message escaped (printable.hpp), so that it is valid UTF-8 for a terminal and a result
+// JSON, and it still names the file. Each file here has a name with a byte 0xFF and contents with
+// bytes that are not UTF-8 where the reader quotes them.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "compare.hpp"
+#include "ebp_verify.hpp"
+#include "errors.hpp"
+#include "npy.hpp"
+#include "npz.hpp"
+#include "points_text.hpp"
+#include "printable.hpp"
+#include "query_set.hpp"
+#include "suite.hpp"
+#include "test_support.hpp"
+#include "zip.hpp"
+
+using namespace bvhbench;
+using namespace bvhbench::test;
+
+namespace {
+
+/// Checks a refusal's message: printable (so valid UTF-8), naming `path` as printable() writes
+/// it, and quoting what it quotes escaped (`escaped`, e.g. "\\xFE"), never the raw bytes.
+void expect_printable_refusal(const std::function<void()>& read, const std::string& path, const std::string& escaped) {
+  SCOPED_TRACE(printable(path));
+  try {
+    read();
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(printable(msg), msg) << "not printable: " << printable(msg);
+    EXPECT_NO_THROW((void)nlohmann::json(msg).dump()) << printable(msg);
+    EXPECT_NE(msg.find(printable(path)), std::string::npos) << msg;
+    EXPECT_NE(msg.find(escaped), std::string::npos) << "expected " << escaped << " in: " << msg;
+  }
+}
+
+/// Writes `bytes` to `path`, then expects `read` to refuse it (expect_printable_refusal).
+void expect_refused(const std::string& path, const std::string& bytes, const std::function<void()>& read,
+                    const std::string& escaped) {
+  write_file_bytes(path, bytes);
+  expect_printable_refusal(read, path, escaped);
+}
+
+/// An .npy whose header dict is `dict` (padded as NumPy pads it) followed by `data`.
+std::string npy_with_header(const std::string& dict, const std::string& data = "") {
+  std::string h = dict;
+  while ((10 + h.size() + 1) % 64) h += ' ';
+  h += '\n';
+  std::string out = "\x93NUMPY\x01";
+  out += '\0';
+  out += char(h.size() & 0xff);
+  out += char(h.size() >> 8);
+  return out + h + data;
+}
+
+}  // namespace
+
+TEST(NonUtf8Messages, NpyHeader) {
+  TmpDir dir;
+  const std::string path = dir.file("q\xFF.npy");
+  expect_refused(path, npy_with_header("{'descr': '<f\xFE" "8', 'fortran_order': False, 'shape': (1, 3), }"),
+                 [&] { read_points_npy(path); }, "'<f\\xFE8'");
+  expect_refused(path, npy_with_header("{'descr': '<f8', 'fortran_order': False, 'sh\xFE" "pe': (1, 3), }"),
+                 [&] { read_points_npy(path); }, "sh\\xFEpe");
+  expect_refused(path, "\x93NUMPX\xFE\xFE\xFE\xFE\xFE\xFE", [&] { read_points_npy(path); }, "bad magic");
+}
+
+TEST(NonUtf8Messages, NpzEntryNames) {
+  TmpDir dir;
+  const std::string path = dir.file("t\xFF.npz");
+  {
+    ZipWriter z(path);
+    const std::string bad = "not an npy \xFE";
+    z.add_stored("dist\xFE" "ance.npy", {{bad.data(), bad.size()}});
+    z.commit();
+  }
+  expect_printable_refusal([&] { read_npz(path); }, path, "(entry 'dist\\xFEance.npy')");
+  {
+    ZipWriter z(path);
+    const std::string npy = npy_bytes(NpyArray::f8({1.0}));
+    z.add_stored("a\xFE.npy", {{npy.data(), npy.size()}});
+    z.add_stored("a\xFE.npy", {{npy.data(), npy.size()}});
+    z.commit();
+  }
+  expect_printable_refusal([&] { read_npz(path); }, path, "duplicate entry 'a\\xFE.npy'");
+}
+
+TEST(NonUtf8Messages, TextPoints) {
+  TmpDir dir;
+  const std::string path = dir.file("p\xFF.xyz");
+  expect_refused(path, "1 2 3\n4 5 \xFE" "6\n",
+                 [&] { read_points_text(path); }, "line 2: '\\xFE6' in column 3 is not a number");
+  expect_refused(path, "x\xFE y z\n", [&] { read_points_text(path); }, "(line 1: 'x\\xFE y z')");
+}
+
+TEST(NonUtf8Messages, QuerySetSidecar) {
+  TmpDir dir;
+  const std::string points = dir.file("s\xFF.xyz");
+  write_file_bytes(points, "1 2 3\n");
+  write_file_bytes(dir.file("s\xFF.json"), "{\"kind\": \"r\xFE\", \"n\": 1, \"seed\": 1}");
+  expect_printable_refusal([&] { load_query_set(points); }, dir.file("s\xFF.json"), "malformed JSON");
+}
+
+TEST(NonUtf8Messages, SuiteYaml) {
+  TmpDir dir;
+  const std::string path = dir.file("s\xFF.yml");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    methods: [br\xFEute]\n",
+                 [&] { load_suite(path); }, "br\\xFEute");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [rand\xFEom]\n    methods: [brute_force]\n",
+                 [&] { load_suite(path); }, "rand\\xFEom");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    query: [ins\xFEide]\n    methods: [brute_force]\n",
+                 [&] { load_suite(path); }, "ins\\xFEide");
+}
+
+TEST(NonUtf8Messages, CompareResultFiles) {
+  TmpDir dir;
+  const std::string path = dir.file("r\xFF.json");
+  expect_refused(path, "{\"schema\": \"bvhbench.result/1\", \"status\": \"o\xFEk\"}",
+                 [&] { load_result_set(path); }, "malformed JSON");
+  expect_refused(path, "{\"schema\": \"bvhbench.result/2\\u00e9\", \"status\": \"ok\"}",
+                 [&] { load_result_set(path); }, "unknown result schema");
+}
+
+TEST(NonUtf8Messages, EbpVerify) {
+  TmpDir dir;
+  const std::string path = dir.file("m\xFF.ebp");
+  write_file_bytes(path, std::string(600, '\xFE'));
+  const ebp::VerifyReport rep = ebp::verify_store(path);
+  ASSERT_EQ(rep.problems.size(), 1u);
+  const std::string msg = rep.problems[0].message;
+  EXPECT_EQ(printable(msg), msg);
+  EXPECT_NE(msg.find(printable(path)), std::string::npos) << msg;
+}

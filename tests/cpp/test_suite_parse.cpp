@@ -1,0 +1,81 @@
+// Suite files (suite.hpp: parse_suite / load_suite): what the runner relies on is checked when
+// the suite is read, and a malformed value anywhere is an InputError naming the file, never a
+// yaml-cpp exception or a message without the file.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "errors.hpp"
+#include "suite.hpp"
+#include "test_support.hpp"
+
+using namespace bvhbench;
+using namespace bvhbench::test;
+
+namespace {
+
+/// A one-matrix suite with `methods` and `query` as given (YAML flow values).
+std::string suite(const std::string& methods, const std::string& query = "[inside]", const std::string& head = "") {
+  return head + "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    query: " + query + "\n    methods: " + methods +
+         "\n";
+}
+
+}  // namespace
+
+TEST(SuiteParse, AGoodSuiteExpands) {
+  const SuiteConfig cfg = parse_suite(suite("[brute_force, {name: ebp_octree, params: {leaf_factor: [3, 5]}}]",
+                                            "[inside, distance]", "repeat: 2\nmemory_limit_mb: 0\n"),
+                                      "dir/s.yml");
+  EXPECT_EQ(cfg.repeat, 2);
+  EXPECT_EQ(cfg.memory_limit_mb, 0);
+  ASSERT_EQ(cfg.jobs.size(), 6u);
+  EXPECT_EQ(cfg.jobs[0].id, "m__random-n10000-s1__inside__brute_force");
+  EXPECT_EQ(cfg.jobs[0].mesh.path, "dir/m.ply");
+  EXPECT_EQ(cfg.jobs[1].method_spec, "ebp_octree:leaf_factor=3");
+}
+
+// A map or a list where a string is read: yaml-cpp's BadConversion escaped (found by fuzz_suite).
+TEST(SuiteParse, ValuesOfTheWrongShapeAreRefused) {
+  expect_input_error([] { parse_suite(suite("[brute_force]", "[{inside: 1}]"), "s.yml"); }, "s.yml",
+                     "bad value: yaml-cpp: error at line 4");
+  expect_input_error([] { parse_suite(suite("[{name: brute_force, params: {[a]: 1}}]"), "s.yml"); }, "s.yml",
+                     "bad value");
+  expect_input_error(
+      [] { parse_suite("matrices:\n  - meshes: [{path: {a: b}}]\n    queries: [random]\n    methods: [x]\n", "s.yml"); },
+      "s.yml", "bad value: yaml-cpp: error at line 2");
+}
+
+// A method spec that is not NAME:k=v was refused without the file's name and with its bytes
+// unescaped (found by fuzz_suite).
+TEST(SuiteParse, AMalformedMethodSpecNamesTheFile) {
+  expect_input_error([] { parse_suite(suite("[\"brute_force:winding_threshold\"]"), "s.yml"); }, "s.yml",
+                     "'winding_threshold' is not key=value (line 5)");
+  expect_input_error([] { parse_suite(suite("[\"fault:mode=none,mode=none\"]"), "s.yml"); }, "s.yml",
+                     "'mode' given twice");
+}
+
+// The child's address-space limit is set from memory_limit_mb (found in review).
+TEST(SuiteParse, TheMemoryLimitIsANumberOfMiBFromZero) {
+  for (const char* bad : {"-1", ".inf", ".nan"})
+    expect_input_error([&] { parse_suite(suite("[brute_force]", "[inside]", std::string("memory_limit_mb: ") + bad + "\n"), "s.yml"); },
+                       "s.yml", "memory_limit_mb must be a number of MiB >= 0");
+  EXPECT_EQ(parse_suite(suite("[brute_force]", "[inside]", "memory_limit_mb: 1e300\n"), "s.yml").memory_limit_mb, 1e300);
+}
+
+// A few hundred bytes can ask for millions of jobs (a sweep of seven parameters, a matrix aliased
+// many times): refused before they are listed (found in review; 324 bytes of sweeps took 2 s and
+// 80,000 jobs, one parameter more would take minutes and gigabytes).
+TEST(SuiteParse, ASuiteOfMillionsOfJobsIsRefused) {
+  const std::string ten = "[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]";
+  const std::string sweep = "[{name: ebp_octree, params: {leaf_factor: " + ten + ", max_planes: " + ten +
+                            ", cluster_angle: " + ten + ", cache_mb: " + ten + ", store: " + ten + ", coherent: [true, false]}}]";
+  expect_input_error([&] { parse_suite(suite(sweep), "s.yml"); }, "s.yml", "more than 100000 variants");
+  std::string matrices =
+      "_m: &m {meshes: [a, b, c, d, e, f, g, h, i, j], queries: [random, near], methods: [brute_force, ebp_octree, fault]}\n"
+      "matrices: [";
+  for (int i = 0; i < 2000; ++i) matrices += i ? ", *m" : "*m";
+  expect_input_error([&] { parse_suite(matrices + "]\n", "s.yml"); }, "s.yml", "expands to more than 100000 jobs");
+  // Below the limit, duplicates are dropped as before.
+  EXPECT_EQ(parse_suite("_m: &m {meshes: [a], queries: [random], methods: [brute_force]}\nmatrices: [*m, *m]\n", "s.yml").jobs.size(),
+            2u);
+}
