@@ -42,6 +42,13 @@ void expect_printable_refusal(const std::function<void()>& read, const std::stri
   }
 }
 
+/// Writes `bytes` to `path`, then expects `read` to refuse it (expect_printable_refusal).
+void expect_refused(const std::string& path, const std::string& bytes, const std::function<void()>& read,
+                    const std::string& escaped) {
+  write_file_bytes(path, bytes);
+  expect_printable_refusal(read, path, escaped);
+}
+
 /// An .npy whose header dict is `dict` (padded as NumPy pads it) followed by `data`.
 std::string npy_with_header(const std::string& dict, const std::string& data = "") {
   std::string h = dict;
@@ -59,12 +66,11 @@ std::string npy_with_header(const std::string& dict, const std::string& data = "
 TEST(NonUtf8Messages, NpyHeader) {
   TmpDir dir;
   const std::string path = dir.file("q\xFF.npy");
-  write_file_bytes(path, npy_with_header("{'descr': '<f\xFE" "8', 'fortran_order': False, 'shape': (1, 3), }"));
-  expect_printable_refusal([&] { read_points_npy(path); }, path, "'<f\\xFE8'");
-  write_file_bytes(path, npy_with_header("{'descr': '<f8', 'fortran_order': False, 'sh\xFE" "pe': (1, 3), }"));
-  expect_printable_refusal([&] { read_points_npy(path); }, path, "sh\\xFEpe");
-  write_file_bytes(path, "\x93NUMPX\xFE\xFE\xFE\xFE\xFE\xFE");
-  expect_printable_refusal([&] { read_points_npy(path); }, path, "bad magic");
+  expect_refused(path, npy_with_header("{'descr': '<f\xFE" "8', 'fortran_order': False, 'shape': (1, 3), }"),
+                 [&] { read_points_npy(path); }, "'<f\\xFE8'");
+  expect_refused(path, npy_with_header("{'descr': '<f8', 'fortran_order': False, 'sh\xFE" "pe': (1, 3), }"),
+                 [&] { read_points_npy(path); }, "sh\\xFEpe");
+  expect_refused(path, "\x93NUMPX\xFE\xFE\xFE\xFE\xFE\xFE", [&] { read_points_npy(path); }, "bad magic");
 }
 
 TEST(NonUtf8Messages, NpzEntryNames) {
@@ -90,10 +96,9 @@ TEST(NonUtf8Messages, NpzEntryNames) {
 TEST(NonUtf8Messages, TextPoints) {
   TmpDir dir;
   const std::string path = dir.file("p\xFF.xyz");
-  write_file_bytes(path, "1 2 3\n4 5 \xFE" "6\n");
-  expect_printable_refusal([&] { read_points_text(path); }, path, "line 2: '\\xFE6' in column 3 is not a number");
-  write_file_bytes(path, "x\xFE y z\n");
-  expect_printable_refusal([&] { read_points_text(path); }, path, "(line 1: 'x\\xFE y z')");
+  expect_refused(path, "1 2 3\n4 5 \xFE" "6\n",
+                 [&] { read_points_text(path); }, "line 2: '\\xFE6' in column 3 is not a number");
+  expect_refused(path, "x\xFE y z\n", [&] { read_points_text(path); }, "(line 1: 'x\\xFE y z')");
 }
 
 TEST(NonUtf8Messages, QuerySetSidecar) {
@@ -107,21 +112,21 @@ TEST(NonUtf8Messages, QuerySetSidecar) {
 TEST(NonUtf8Messages, SuiteYaml) {
   TmpDir dir;
   const std::string path = dir.file("s\xFF.yml");
-  write_file_bytes(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    methods: [br\xFEute]\n");
-  expect_printable_refusal([&] { load_suite(path); }, path, "br\\xFEute");
-  write_file_bytes(path, "matrices:\n  - meshes: [m.ply]\n    queries: [rand\xFEom]\n    methods: [brute_force]\n");
-  expect_printable_refusal([&] { load_suite(path); }, path, "rand\\xFEom");
-  write_file_bytes(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    query: [ins\xFEide]\n    methods: [brute_force]\n");
-  expect_printable_refusal([&] { load_suite(path); }, path, "ins\\xFEide");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    methods: [br\xFEute]\n",
+                 [&] { load_suite(path); }, "br\\xFEute");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [rand\xFEom]\n    methods: [brute_force]\n",
+                 [&] { load_suite(path); }, "rand\\xFEom");
+  expect_refused(path, "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    query: [ins\xFEide]\n    methods: [brute_force]\n",
+                 [&] { load_suite(path); }, "ins\\xFEide");
 }
 
 TEST(NonUtf8Messages, CompareResultFiles) {
   TmpDir dir;
   const std::string path = dir.file("r\xFF.json");
-  write_file_bytes(path, "{\"schema\": \"bvhbench.result/1\", \"status\": \"o\xFEk\"}");
-  expect_printable_refusal([&] { load_result_set(path); }, path, "malformed JSON");
-  write_file_bytes(path, "{\"schema\": \"bvhbench.result/2\\u00e9\", \"status\": \"ok\"}");
-  expect_printable_refusal([&] { load_result_set(path); }, path, "unknown result schema");
+  expect_refused(path, "{\"schema\": \"bvhbench.result/1\", \"status\": \"o\xFEk\"}",
+                 [&] { load_result_set(path); }, "malformed JSON");
+  expect_refused(path, "{\"schema\": \"bvhbench.result/2\\u00e9\", \"status\": \"ok\"}",
+                 [&] { load_result_set(path); }, "unknown result schema");
 }
 
 TEST(NonUtf8Messages, EbpVerify) {
