@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_contract.hpp"
-#include "npy.hpp"
+#include "harness/io/npy.hpp"
 
 namespace bvhbench::fuzz {
 
