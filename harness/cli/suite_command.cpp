@@ -31,6 +31,7 @@
 #include "harness/io/query_set_io.hpp"
 #include "harness/run/run_job.hpp"
 #include "harness/run/suite.hpp"
+#include "harness/run/summary_csv.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_path.hpp"
 #include "harness/util/progress.hpp"

@@ -66,10 +66,5 @@ SuiteConfig load_suite(const std::string& path);
 /// paths in it are resolved against its folder). Reads no file.
 SuiteConfig parse_suite(const std::string& yaml, const std::string& path);
 
-/// The flat summary row of one result (also used by compare and tests).
-std::vector<std::string> summary_header();
-std::vector<std::string> summary_row(const nlohmann::json& result);
-/// Writes summary.csv for these results atomically.
-void write_summary_csv(const std::string& path, const std::vector<nlohmann::json>& results);
 
 }  // namespace bvhbench
