@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <sys/resource.h>
 #include <thread>
 #include <vector>
 
@@ -45,10 +46,16 @@ class Fault final : public Method {
       for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
     } else if (mode_ == "oom") {
       // Grow until the allocator fails (the suite's address-space limit) or the OS says no.
+      // Under an address-space limit the allocation itself fails, so the memory is not touched:
+      // filling gigabytes only makes the job slow enough on a loaded machine to end as a timeout
+      // instead. Without a limit, only touched memory runs the machine out of it.
+      rlimit as{};
+      const bool limited = getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY;
       std::vector<char*> blocks;
       for (;;) {
         char* b = new char[256 << 20];
-        std::memset(b, 1, 256 << 20);
+        if (limited) static_cast<volatile char*>(b)[0] = 1;  // one page: the allocation is observable
+        else std::memset(b, 1, 256 << 20);
         blocks.push_back(b);
       }
     } else if (mode_ == "throw") {
