@@ -19,13 +19,18 @@ using json = nlohmann::json;
 
 namespace {
 
-/// `j` with every number x changed to 1.5 x + 1 where that is finite (booleans and strings as
-/// they are).
+/// `j` with every number changed, staying of its kind so that the twin still follows the result
+/// schema: an integer x to 2 x + 1 (where that fits), any other x to 1.5 x + 1 (where that is
+/// finite); booleans and strings as they are.
 json numbers_changed(const json& j) {
   if (j.is_object() || j.is_array()) {
     json out = j;
     for (auto it = out.begin(); it != out.end(); ++it) *it = numbers_changed(*it);
     return out;
+  }
+  if (j.is_number_integer()) {
+    const std::int64_t x = j.get<std::int64_t>();
+    return (x > -(std::int64_t(1) << 61) && x < (std::int64_t(1) << 61)) ? json(2 * x + 1) : j;
   }
   if (j.is_number()) {
     const double x = 1.5 * j.get<double>() + 1;

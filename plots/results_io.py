@@ -1,7 +1,8 @@
 """Loading a result set (`results/NAME/`) into plain Python objects.
 
-The per-job JSON files in `runs/` are authoritative (schema: docs/results.md); `summary.csv` is
-only cross-checked. Nothing here assumes a block is present: failed jobs have no `queries`,
+The per-job JSON files in `runs/` are authoritative; their fields are described once, in
+harness/run/result_schema.json (result_schema.py; docs/results.md), and a reader here can only
+ask for a described field. `summary.csv` is only cross-checked. Nothing here assumes a block is present: failed jobs have no `queries`,
 jobs without an oracle have `accuracy: null`, methods report free-form `structure` blocks.
 Every accessor returns None when a value is missing, so charts can simply skip it.
 """
@@ -11,6 +12,8 @@ import os
 import re
 import sys
 from collections import OrderedDict
+
+import result_schema
 
 OK = "ok"
 KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oom", "error")
@@ -79,6 +82,9 @@ class Job:
         self.path = path
 
     def get(self, path, default=None):
+        """The value at a dotted path of the schema (SchemaError for a path it does not
+        describe), or default when the file lacks it."""
+        result_schema.require_described(path)
         return dig(self.raw, path, default)
 
     def num(self, path):
@@ -170,17 +176,7 @@ class Job:
         return isinstance(self.get("accuracy"), dict)
 
     def is_stress(self):
-        """Does the job itself say its mesh is a stress case?"""
-        for path in ("job.mesh.stress", "job.mesh.tags", "job.mesh.family", "job.mesh.category",
-                     "job.tags", "job.mesh.kind"):
-            v = self.get(path)
-            if v is True:
-                return True
-            if isinstance(v, str) and re.search(r"stress|stability", v, re.I):
-                return True
-            if isinstance(v, list) and any(re.search(r"stress|stability", str(t), re.I)
-                                           for t in v):
-                return True
+        """Does the job's mesh name say it is a stress case?"""
         return bool(STRESS_NAME_RE.search(self.mesh))
 
 
@@ -253,9 +249,7 @@ class ResultSet:
         """
         groups = OrderedDict()
         for j in self.jobs:
-            ctx = j.get("context")
-            ctx = ctx if isinstance(ctx, dict) else {}
-            c = {k: as_str(ctx.get(k)) for k in CONTEXT_KEYS}
+            c = {k: as_str(j.get("context." + k)) for k in CONTEXT_KEYS}
             key = tuple(c[k] for k in MACHINE_KEYS)
             g = groups.setdefault(key, dict(zip(MACHINE_KEYS, key), dates=[], commits=[],
                                              dirty=False, jobs=0))
@@ -300,10 +294,10 @@ def load(root):
             unreadable.append((f, str(e)))
             print(f"warning: {path}: unreadable result file: {e}", file=sys.stderr)
             continue
-        schema = str(raw.get("schema", ""))
-        if schema and not schema.startswith("bvhbench.result/1"):
-            print(f"warning: {path}: schema {schema!r}, expected bvhbench.result/1",
-                  file=sys.stderr)
+        departures = result_schema.problems(raw)
+        if departures:
+            more = f" (and {len(departures) - 1} more)" if len(departures) > 1 else ""
+            print(f"warning: {path}: {departures[0]}{more}", file=sys.stderr)
         jobs.append(Job(raw, path))
     if not jobs:
         why = "contains no result files" if not files else "contains no readable result files"

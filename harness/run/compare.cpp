@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "harness/run/result_schema.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_input.hpp"
 #include "harness/util/json_path.hpp"
@@ -113,46 +114,6 @@ std::string str(const json& j, const std::string& fallback = "") {
   return j.is_string() ? j.get<std::string>() : fallback;
 }
 
-/// Checks the parts of a result that compare relies on; a violation is bad input (exit 2).
-void validate_result(const std::string& file, const json& r) {
-  if (!r.is_object()) throw file_error(file, "not a bvhbench result (a JSON object is expected)");
-  const std::string schema = str(json_at(r, {"schema"}));
-  if (schema.rfind("bvhbench.result/", 0) != 0)
-    throw file_error(file, "not a bvhbench result (no \"schema\": \"bvhbench.result/1\")");
-  if (schema != "bvhbench.result/1") throw file_error(file, "unknown result schema '" + schema + "'");
-  if (!json_at(r, {"status"}).is_string()) throw file_error(file, "result without a \"status\" string");
-  if (!json_at(r, {"job"}).is_object()) throw file_error(file, "result without a \"job\" object");
-  if (!json_at(r, {"job", "method"}).is_string()) throw file_error(file, "result without job.method");
-  auto need_object_or_null = [&](const json& v, const char* what) {
-    if (!v.is_null() && !v.is_object()) throw file_error(file, std::string(what) + " must be an object");
-  };
-  need_object_or_null(json_at(r, {"counters"}), "counters");
-  need_object_or_null(json_at(r, {"accuracy"}), "accuracy");
-  need_object_or_null(json_at(r, {"calibration"}), "calibration");
-  need_object_or_null(json_at(r, {"job", "params"}), "job.params");
-  const json& machine = json_at(r, {"machine_dependent"});
-  need_object_or_null(machine, "machine_dependent");
-  const json& machine_names = json_at(machine, {"counters"});
-  if (!machine_names.is_null()) {
-    if (!machine_names.is_array()) throw file_error(file, "machine_dependent.counters must be an array of counter names");
-    for (auto& v : machine_names)
-      if (!v.is_string()) throw file_error(file, "machine_dependent.counters holds a non-string");
-  }
-  need_object_or_null(json_at(machine, {"fingerprint"}), "machine_dependent.fingerprint");
-  const json& samples = json_at(r, {"queries", "throughput_qps", "samples"});
-  if (!samples.is_null()) {
-    if (!samples.is_array()) throw file_error(file, "queries.throughput_qps.samples must be an array");
-    for (auto& s : samples)
-      if (!s.is_number()) throw file_error(file, "queries.throughput_qps.samples holds a non-number");
-  }
-  const json& counters = json_at(r, {"counters"});
-  if (counters.is_object())
-    for (auto& [k, v] : counters.items())
-      if (!v.is_number() && !v.is_null()) throw file_error(file, "counter '" + k + "' is not a number");
-  const json& cal = json_at(r, {"calibration", "median_seconds"});
-  if (!cal.is_null() && !cal.is_number()) throw file_error(file, "calibration.median_seconds must be a number");
-}
-
 json read_result_file(const std::string& file) {
   std::ifstream f(file, std::ios::binary);
   if (!f) throw file_error(file, "cannot read");
@@ -165,7 +126,7 @@ json read_result_file(const std::string& file) {
 
 json parse_result(const std::string& text, const std::string& file) {
   json r = parse_json_input(text, file);
-  validate_result(file, r);
+  ResultSchema::get().validate(r, file);
   return r;
 }
 

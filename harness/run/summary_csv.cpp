@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "harness/run/result_schema.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_path.hpp"
 
@@ -38,50 +39,45 @@ std::string num(const json& j) {
   return "";
 }
 
+const json& field(const json& r, const std::string& path) { return json_at(r, split_field_path(path)); }
 
-const std::vector<std::string> kCounterColumns = {"nodes_visited", "triangles_tested", "planes_tested",
-                                                   "bytes_read", "cache_hit_rate"};
+/// One cell, as the schema's summary_csv entry for its column says.
+std::string cell(const json& r, const SummaryColumn& c) {
+  if (!c.field.empty()) {
+    const json& v = field(r, c.field);
+    if (v.is_null() && !c.or_stem_of.empty()) {
+      const json& p = field(r, c.or_stem_of);
+      return p.is_string() ? fs::path(p.get<std::string>()).stem().string() : "";
+    }
+    return num(v);
+  }
+  if (!c.ratio_of[0].empty()) {
+    const json& a = field(r, c.ratio_of[0]);
+    const json& b = field(r, c.ratio_of[1]);
+    if (a.is_number() && b.is_number() && b.get<double>() > 0) return num(json(a.get<double>() / b.get<double>()));
+    return "";
+  }
+  if (!c.share_of[0].empty()) {
+    const json& a = field(r, c.share_of[0]);
+    const json& b = field(r, c.share_of[1]);
+    if (!a.is_number() || !b.is_number()) return "";
+    const double total = a.get<double>() + b.get<double>();
+    return total > 0 ? num(json(a.get<double>() / total)) : "";
+  }
+  return "";
+}
 
 }  // namespace
 
 std::vector<std::string> summary_header() {
-  std::vector<std::string> h = {"job_id", "method", "params_key", "mesh", "triangles", "query_kind", "n",
-                                "query", "status", "message", "build_s", "structure_bytes",
-                                "bytes_per_triangle", "peak_rss_bytes", "query_rss_bytes", "qps_median",
-                                "qps_min", "qps_max", "p50_ns", "p99_ns", "p999_ns", "max_ns",
-                                "over_deadline", "inside_wrong_rate", "inside_wrong_far",
-                                "dist_abs_err_max", "dist_rel_err_p99", "normal_err_p99_deg"};
-  for (auto& c : kCounterColumns) h.push_back("c_" + c);
+  std::vector<std::string> h;
+  for (const SummaryColumn& c : ResultSchema::get().summary_columns()) h.push_back(c.column);
   return h;
 }
 
 std::vector<std::string> summary_row(const json& r) {
-  auto mesh_name = [&]() -> std::string {
-    json n = json_at(r, {"job", "mesh", "name"});
-    if (n.is_string()) return n;
-    json p = json_at(r, {"job", "mesh", "path"});
-    return p.is_string() ? fs::path(p.get<std::string>()).stem().string() : "";
-  };
-  json tris = json_at(r, {"job", "mesh", "triangles"});
-  json sb = json_at(r, {"build", "structure_bytes"});
-  std::string bpt;
-  if (tris.is_number() && sb.is_number() && tris.get<double>() > 0) bpt = num(json(sb.get<double>() / tris.get<double>()));
-  std::vector<std::string> row = {
-      num(json_at(r, {"job", "id"})), num(json_at(r, {"job", "method"})), num(json_at(r, {"job", "params_key"})), mesh_name(),
-      num(tris), num(json_at(r, {"job", "queries", "kind"})), num(json_at(r, {"job", "queries", "n"})),
-      num(json_at(r, {"job", "query"})), num(json_at(r, {"status"})), num(json_at(r, {"message"})),
-      num(json_at(r, {"build", "seconds"})), num(sb), bpt, num(json_at(r, {"memory", "peak_rss_bytes"})),
-      num(json_at(r, {"memory", "query_rss_bytes"})), num(json_at(r, {"queries", "throughput_qps", "median"})),
-      num(json_at(r, {"queries", "throughput_qps", "min"})), num(json_at(r, {"queries", "throughput_qps", "max"})),
-      num(json_at(r, {"queries", "latency_ns", "p50"})), num(json_at(r, {"queries", "latency_ns", "p99"})),
-      num(json_at(r, {"queries", "latency_ns", "p999"})), num(json_at(r, {"queries", "latency_ns", "max"})),
-      num(json_at(r, {"queries", "over_deadline"})), num(json_at(r, {"accuracy", "inside", "rate"})),
-      num(json_at(r, {"accuracy", "inside", "wrong_far"})),
-      num(json_at(r, {"accuracy", "distance", "abs_error", "max"})),
-      num(json_at(r, {"accuracy", "distance", "rel_error", "p99"})),
-      num(json_at(r, {"accuracy", "distance", "normal_angle_deg", "p99"}))};
-  for (auto& c : kCounterColumns) row.push_back(num(json_at(r, {"counters", c.c_str()})));
-  for (auto& s : row) s = csv_escape(s);
+  std::vector<std::string> row;
+  for (const SummaryColumn& c : ResultSchema::get().summary_columns()) row.push_back(csv_escape(cell(r, c)));
   return row;
 }
 

@@ -3,6 +3,8 @@
 /// version, status rows without blocks): a missing key or a non-object on the way gives null,
 /// never an exception.
 #include <initializer_list>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -13,6 +15,19 @@ inline const nlohmann::json& json_at(const nlohmann::json& j, std::initializer_l
   static const nlohmann::json null_json;
   const nlohmann::json* p = &j;
   for (const char* k : path) {
+    if (!p->is_object()) return null_json;
+    auto it = p->find(k);
+    if (it == p->end()) return null_json;
+    p = &*it;
+  }
+  return *p;
+}
+
+/// The same for a path held at run time (a schema's field, split at its dots).
+inline const nlohmann::json& json_at(const nlohmann::json& j, const std::vector<std::string>& path) {
+  static const nlohmann::json null_json;
+  const nlohmann::json* p = &j;
+  for (const std::string& k : path) {
     if (!p->is_object()) return null_json;
     auto it = p->find(k);
     if (it == p->end()) return null_json;

@@ -33,15 +33,22 @@ def make_result(method="ebp_octree", params=None, kind="random", query="inside",
         "definition": "exact",
         "truth": f"{out_dir}/data/truth/a1a1_{kind}.npz",
         "near_surface_threshold": 1.23e-06,
+        "near_surface": 2,
+        "inside": None,
+        "distance": None,
     }
     if query == "inside":
         accuracy["inside"] = {"wrong": 0, "rate": 0.0, "near_surface": 2, "wrong_near_surface": 0,
-                              "wrong_far": 0, "rate_far": 0.0, "n_far": 1998}
+                              "wrong_far": 0, "rate_far": 0.0, "n_far": 1998, "ambiguous": 0,
+                              "wrong_ambiguous": 0}
     else:
         accuracy["distance"] = {"abs_error": {"max": 2.3e-7, "p99": 1.1e-7, "mean": 3.4567890123e-8},
                                 "rel_error": {"max": 1.87e-7, "p99": 8.9e-8, "mean": 2.81e-8},
+                                "closest_error": {"max": 2.9e-7, "p99": 1.2e-7, "mean": 4.1e-8},
                                 "normal_angle_deg": {"max": 0.0021, "p99": 0.0004, "mean": 3.1e-05},
-                                "triangle_agreement": 0.9985, "sign_wrong": 0}
+                                "triangle_agreement": 0.9985, "triangle_compared": 2000,
+                                "triangle_tied": 12, "triangle_unknown": 0, "sign_wrong": 0,
+                                "sign_wrong_rate": 0.0, "non_finite": 0}
     srt = sorted(qps)
     r = {
         "schema": "bvhbench.result/1",
@@ -54,7 +61,7 @@ def make_result(method="ebp_octree", params=None, kind="random", query="inside",
                 "mesh": {"path": "../../shared/meshes/cow.obj", "name": "cow", "sha256": MESH_SHA,
                          "triangles": 5804, "vertices": 2903, "diagonal": 1.23},
                 "queries": {"path": f"{out_dir}/data/queries/cow__{kind}-n2000-s1.npy", "sha256": QSETS[kind],
-                            "kind": kind, "n": 2000, "seed": 1},
+                            "kind": kind, "n": 2000, "seed": 1, "mesh_sha256": MESH_SHA},
                 "repetitions": len(qps), "threads": 1, "truth": accuracy["truth"], "suite": "ci"},
         "status": status,
         "message": "" if status == "ok" else f"synthetic {status}",
@@ -131,6 +138,16 @@ ID_EBP_HAPTIC_DIST = "cow__haptic-n2000-s1__distance__ebp_octree"
 
 
 # ---- identical, context --------------------------------------------------------------------------
+
+def test_the_synthetic_results_follow_the_schema():
+    """make_result writes what the runner writes (harness/run/result_schema.json), so that these
+    tests exercise compare on results it must accept."""
+    import sys
+    sys.path.insert(0, str(REPO / "plots"))
+    import result_schema
+    for r in (make_result(), make_result(query="distance"), make_result(status="crash")):
+        assert result_schema.problems(r) == []
+
 
 def test_identical_results_exit_0(tmp_path):
     b = write_set(tmp_path / "base", base_set())

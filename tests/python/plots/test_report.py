@@ -267,13 +267,15 @@ def test_stress_suite_recognised_by_its_failures():
                                                                                   "d"}
 
 
-def test_stress_mesh_known_by_metadata():
-    """A result whose mesh carries a stress tag (the runner writes none today; a mesh made
-    elsewhere may) is a stress case whatever its name."""
-    tagged = _job("spot_noisy", "ok")
-    tagged.raw["job"]["mesh"]["family"] = "stress"
-    jobs = [tagged] + [_job(m, "ok") for m in ("cow", "fandisk")]
-    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == {"spot_noisy"}
+def test_a_reader_cannot_ask_for_a_field_nobody_writes():
+    """Job.get takes only paths of harness/run/result_schema.json, so a chart or table reading a
+    field the runner does not write fails in the first test that draws it."""
+    import result_schema
+    job = _job("cow", "ok")
+    assert job.get("job.mesh.name") == "cow"
+    assert job.get("counters.any_counter") is None          # described: counters.*
+    with pytest.raises(result_schema.SchemaError, match="job.mesh.family"):
+        job.get("job.mesh.family")
 
 
 def test_unknown_methods_get_a_stable_colour():
