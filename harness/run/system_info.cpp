@@ -68,8 +68,11 @@ nlohmann::json run_context() {
     std::string commit = run_capture("git -C '" + src + "' rev-parse HEAD 2>/dev/null");
     c["git_commit"] = commit.empty() ? nlohmann::json(nullptr) : nlohmann::json(commit);
     if (!commit.empty()) {
+      // Changes to the sources, not to the result sets kept in the tree: a rebaseline rewrites
+      // results/baseline while it runs, and must still record the clean commit it was made from.
       std::string dirty = run_capture("git -C '" + src +
-                                      "' status --porcelain --untracked-files=no 2>/dev/null | head -1");
+                                      "' status --porcelain --untracked-files=no -- . ':(exclude)results'"
+                                      " ':(exclude)tests/fixtures/results_small' 2>/dev/null | head -1");
       c["git_dirty"] = !dirty.empty();
     } else {
       c["git_dirty"] = nullptr;
