@@ -13,6 +13,7 @@
 
 #include "fuzz_contract.hpp"
 #include "harness/run/compare.hpp"
+#include "harness/run/compare_markdown.hpp"
 
 using namespace bvhbench;
 using json = nlohmann::json;

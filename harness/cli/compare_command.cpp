@@ -8,6 +8,7 @@
 
 #include "harness/cli/commands.hpp"
 #include "harness/run/compare.hpp"
+#include "harness/run/compare_markdown.hpp"
 
 using json = nlohmann::json;
 

@@ -4,181 +4,26 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <map>
 #include <set>
-#include <sstream>
 
-#include <CLI/CLI.hpp>
-
-#include "harness/run/result_schema.hpp"
+#include "harness/run/compare_format.hpp"
+#include "harness/run/mann_whitney.hpp"
 #include "harness/util/errors.hpp"
-#include "harness/util/json_input.hpp"
 #include "harness/util/json_path.hpp"
+#include "harness/util/printable.hpp"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace bvhbench {
 
-// ---------------------------------------------------------------------------------------------
-// Mann-Whitney U
-// ---------------------------------------------------------------------------------------------
-namespace {
+using namespace compare_format;
 
-/// Mid-ranks (1-based) of the pooled sample, and the tie groups' sizes.
-std::vector<double> midranks(const std::vector<double>& pooled, std::vector<std::size_t>* ties) {
-  const std::size_t n = pooled.size();
-  std::vector<std::size_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return pooled[a] < pooled[b]; });
-  std::vector<double> rank(n);
-  for (std::size_t i = 0; i < n;) {
-    std::size_t j = i;
-    while (j + 1 < n && pooled[order[j + 1]] == pooled[order[i]]) ++j;
-    const double r = 0.5 * double(i + 1 + j + 1);
-    for (std::size_t k = i; k <= j; ++k) rank[order[k]] = r;
-    if (ties) ties->push_back(j - i + 1);
-    i = j + 1;
-  }
-  return rank;
-}
-
-}  // namespace
-
-MannWhitney mann_whitney_u(const std::vector<double>& x, const std::vector<double>& y, bool force_exact,
-                           bool force_asymptotic) {
-  MannWhitney r;
-  const std::size_t n1 = x.size(), n2 = y.size(), n = n1 + n2;
-  if (n1 == 0 || n2 == 0) return r;
-  std::vector<double> pooled(x);
-  pooled.insert(pooled.end(), y.begin(), y.end());
-  std::vector<std::size_t> ties;
-  const std::vector<double> rank = midranks(pooled, &ties);
-  double r1 = 0;
-  for (std::size_t i = 0; i < n1; ++i) r1 += rank[i];
-  r.u1 = r1 - double(n1) * double(n1 + 1) / 2;
-  const double u2 = double(n1) * double(n2) - r.u1;
-  r.u = std::max(r.u1, u2);
-
-  const bool exact = force_exact || (!force_asymptotic && n1 <= kMannWhitneyExactMax && n2 <= kMannWhitneyExactMax);
-  if (exact) {
-    // Permutation distribution of the first sample's rank sum: count the n1-subsets of the
-    // pooled ranks by their sum. Ranks are doubled so that mid-ranks (k + 1/2) are integers.
-    std::vector<long> r2(n);
-    long total2 = 0;
-    for (std::size_t i = 0; i < n; ++i) total2 += (r2[i] = std::lround(2 * rank[i]));
-    const long obs2 = std::lround(2 * r1);
-    // ways[k][s]: number of k-subsets of the ranks seen so far with doubled sum s.
-    std::vector<std::vector<long double>> ways(n1 + 1, std::vector<long double>(std::size_t(total2) + 1, 0.0L));
-    ways[0][0] = 1;
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = std::min(i + 1, n1); k >= 1; --k)
-        for (long s = total2; s >= r2[i]; --s) ways[k][std::size_t(s)] += ways[k - 1][std::size_t(s - r2[i])];
-    long double all = 0, le = 0, ge = 0;
-    for (long s = 0; s <= total2; ++s) {
-      const long double w = ways[n1][std::size_t(s)];
-      all += w;
-      if (s <= obs2) le += w;
-      if (s >= obs2) ge += w;
-    }
-    r.p_value = double(std::min<long double>(1.0L, 2.0L * std::min(le, ge) / all));
-    r.exact = true;
-  } else {
-    double tie_term = 0;
-    for (std::size_t t : ties) tie_term += double(t) * double(t) * double(t) - double(t);
-    const double nn = double(n);
-    const double var = double(n1) * double(n2) / 12.0 * ((nn + 1) - tie_term / (nn * (nn - 1)));
-    if (var <= 0) {
-      r.p_value = 1;  // every value equal: nothing to tell apart
-    } else {
-      const double z = (r.u - double(n1) * double(n2) / 2 - 0.5) / std::sqrt(var);
-      r.p_value = std::min(1.0, std::max(0.0, std::erfc(z / std::sqrt(2.0))));
-    }
-    r.exact = false;
-  }
-  return r;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Reading result sets
-// ---------------------------------------------------------------------------------------------
 namespace {
 
 
-std::string str(const json& j, const std::string& fallback = "") {
-  return j.is_string() ? j.get<std::string>() : fallback;
-}
-
-json read_result_file(const std::string& file) {
-  std::ifstream f(file, std::ios::binary);
-  if (!f) throw file_error(file, "cannot read");
-  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (f.bad()) throw file_error(file, "read failed");
-  return parse_result(text, file);
-}
-
-}  // namespace
-
-json parse_result(const std::string& text, const std::string& file) {
-  json r = parse_json_input(text, file);
-  ResultSchema::get().validate(r, file);
-  return r;
-}
-
-ResultSet load_result_set(const std::string& path) {
-  ResultSet set;
-  set.path = path;
-  std::error_code ec;
-  const fs::path p(path);
-  if (!fs::exists(p, ec)) throw file_error(path, "no such file or folder");
-  if (fs::is_directory(p, ec)) {
-    const fs::path dir = fs::is_directory(p / "runs", ec) ? p / "runs" : p;
-    fs::directory_iterator it(dir, ec), end;
-    if (ec) throw file_error(dir.string(), "cannot list folder: " + ec.message());
-    for (; it != end; it.increment(ec)) {
-      if (ec) throw file_error(dir.string(), "cannot list folder: " + ec.message());
-      if (it->path().extension() == ".json" && !fs::is_directory(it->path(), ec)) set.files.push_back(it->path().string());
-    }
-    if (set.files.empty()) throw file_error(dir.string(), "no result files (*.json): not a result folder?");
-    std::sort(set.files.begin(), set.files.end());
-  } else {
-    set.files.push_back(path);
-  }
-  for (auto& f : set.files) set.results.push_back(read_result_file(f));
-  return set;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The comparison
-// ---------------------------------------------------------------------------------------------
-namespace {
-
-std::string fmt(double v, const char* f = "%.6g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
-/// The shortest decimal that reads back as the same double: exact, and readable.
-std::string shortest(double v) {
-  for (int prec = 6; prec < 17; ++prec) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
-    if (std::strtod(buf, nullptr) == v) return buf;
-  }
-  return fmt(v, "%.17g");
-}
-
-std::string show(const json& v) {
-  if (v.is_null()) return "(none)";
-  if (v.is_number_float()) return shortest(v.get<double>());
-  return v.dump();
-}
 
 double median_of(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -263,12 +108,6 @@ bool same_value(const json& a, const json& b, double rtol) {
   return a == b;
 }
 
-std::string change_text(const json& a, const json& b) {
-  std::string s = show(a) + " -> " + show(b);
-  if (a.is_number() && b.is_number() && a.get<double>() != 0)
-    s += " (" + fmt(100.0 * (b.get<double>() / a.get<double>() - 1), "%+.3g") + "%)";
-  return s;
-}
 
 /// A short name for a machine fingerprint, for the report's header: CPU and widest vector ISA.
 std::string fingerprint_label(const json& fp) {
@@ -619,114 +458,6 @@ json compare_result_sets(const ResultSet& base, const ResultSet& fresh, const Co
           {"summary", summary},
           {"pairs", rows},
           {"exit_code", gating ? 1 : 0}};
-}
-
-// ---------------------------------------------------------------------------------------------
-// Markdown
-// ---------------------------------------------------------------------------------------------
-namespace {
-
-std::string join(const json& arr) {
-  std::string s;
-  for (auto& v : arr) s += (s.empty() ? "" : ", ") + v.get<std::string>();
-  return s.empty() ? "?" : s;
-}
-
-std::string md_cell(std::string s) {
-  std::string o;
-  for (char c : s) o += c == '|' ? std::string("\\|") : c == '\n' ? std::string(" ") : std::string(1, c);
-  return o;
-}
-
-std::string qps_text(const json& v) {
-  return v.is_number() ? fmt(v.get<double>(), "%.4g") : std::string("-");
-}
-
-}  // namespace
-
-std::string compare_markdown(const json& rep) {
-  std::ostringstream o;
-  const json& s = rep["summary"];
-  const json& opt = rep["options"];
-  const int gating = s["gating"].get<int>();
-  o << "## bvhbench compare: " << (gating ? "REGRESSION (" + std::to_string(gating) + " gating)" : std::string("OK"))
-    << "\n\n";
-  for (const char* side : {"base", "new"}) {
-    const json& b = rep[side];
-    o << "- " << (std::string(side) == "base" ? "BASE" : "NEW") << ": `" << b["path"].get<std::string>() << "`, "
-      << b["results"].get<std::size_t>() << " results; host " << join(b["hosts"]) << "; commit " << join(b["commits"])
-      << "; machine " << join(b["machines"]) << "\n";
-  }
-  o << "- Counters, accuracy and statuses: exact (any change gates), except the counters a method declares "
-       "machine-dependent, which gate only when both results carry the same machine fingerprint and are "
-       "otherwise reported, not gated. Throughput: normalised by the "
-       "calibration kernel; a change counts when it exceeds "
-    << fmt(100 * opt["threshold"].get<double>(), "%g") << "% and a two-sided Mann-Whitney U test gives p < "
-    << fmt(opt["alpha"].get<double>(), "%g") << "; timing verdicts "
-    << (opt["timing"] == "gate" ? "gate" : "are reported only (--timing report)") << ".\n\n";
-  o << "| | verdict | job | q/s base -> new | change (normalised) | p | why |\n";
-  o << "|---|---|---|---:|---:|---:|---|\n";
-  for (auto& p : rep["pairs"]) {
-    const json& t = p.contains("timing") ? p["timing"] : json(nullptr);
-    std::string why;
-    for (auto& r : p["reasons"]) {
-      if (r["code"] == "missing" || r["code"] == "new") why += r["detail"].get<std::string>();
-      else why += (why.empty() ? "" : "; ") + r["code"].get<std::string>() + ": " + r["detail"].get<std::string>();
-    }
-    if (why.empty() && p.contains("status") && p["status"]["new"] != "ok")
-      why = "status " + p["status"]["new"].get<std::string>() + " (as in BASE)";
-    if (t.is_object() && t.contains("note")) why += (why.empty() ? "" : "; ") + t["note"].get<std::string>();
-    if (why.size() > 300) why = printable(why.substr(0, 297)) + "...";
-    std::string qps = "-", change = "-", pv = "-";
-    if (t.is_object()) {
-      qps = qps_text(t["base_qps_median"]) + " -> " + qps_text(t["new_qps_median"]);
-      if (t["change"].is_number()) change = fmt(100 * t["change"].get<double>(), "%+.1f") + "%";
-      if (t["p_value"].is_number()) pv = fmt(t["p_value"].get<double>(), "%.2g");
-    }
-    o << "| " << (p["gates"].get<bool>() ? "**x**" : "") << " | " << p["verdict"].get<std::string>() << " | "
-      << md_cell(p["job"].get<std::string>()) << " | " << qps << " | " << change << " | " << pv << " | " << md_cell(why)
-      << " |\n";
-  }
-  o << "\n" << s["failed"].get<int>() << " failed, " << s["regressed"].get<int>() << " regressed, "
-    << s["missing"].get<int>() << " missing, " << s["improved"].get<int>() << " improved, " << s["new"].get<int>()
-    << " new, " << s["unchanged"].get<int>() << " unchanged; " << gating << " gating.\n";
-  const json& ng = s["not_gated"];
-  if (ng["counters"].get<std::size_t>() > 0) {
-    std::string why;
-    for (auto& w : ng["why"]) why += (why.empty() ? "" : "; ") + w.get<std::string>();
-    o << "\nNot gated: " << ng["counters"].get<std::size_t>() << " machine-dependent counter values in "
-      << ng["jobs"].get<std::size_t>() << " jobs, " << ng["changed"].get<std::size_t>() << " of them changed, because "
-      << why << ".\n";
-  }
-
-  // Full lists of what changed, for the rows above whose cells were cut short.
-  bool header = false;
-  for (auto& p : rep["pairs"]) {
-    if (!p.contains("counters") && !p.contains("accuracy")) continue;
-    if (!header) o << "\n### Changed counters and accuracy\n";
-    header = true;
-    o << "\n`" << p["job"].get<std::string>() << "`\n";
-    if (p.contains("counters"))
-      for (auto& c : p["counters"]) o << "- counter `" << c["name"].get<std::string>() << "`: " << change_text(c["base"], c["new"]) << "\n";
-    if (p.contains("accuracy"))
-      for (auto& a : p["accuracy"]) o << "- accuracy `" << a["field"].get<std::string>() << "`: " << change_text(a["base"], a["new"]) << "\n";
-  }
-  header = false;
-  for (auto& p : rep["pairs"]) {
-    if (!p.contains("counters_not_gated")) continue;
-    if (!header)
-      o << "\n### Machine-dependent counters, reported and not gated\n\n"
-           "They depend on the processor as well as on the input; a baseline made on a machine with the same "
-           "fingerprint gates them exactly (docs/compare.md, \"The CI gate\").\n";
-    header = true;
-    o << "\n`" << p["job"].get<std::string>() << "`: not gated because " << p["machine_dependent"]["not_gated_because"].get<std::string>() << "\n";
-    for (auto& c : p["counters_not_gated"])
-      o << "- counter `" << c["name"].get<std::string>() << "`: " << change_text(c["base"], c["new"]) << "\n";
-  }
-  if (gating)
-    o << "\nIf these changes are intended, regenerate the baseline (docs/compare.md, `make rebaseline`) "
-         "and commit it with the change.\n";
-  return o.str();
 }
 
 }  // namespace bvhbench

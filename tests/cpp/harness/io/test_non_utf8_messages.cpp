@@ -15,7 +15,7 @@
 #include "harness/io/points_text.hpp"
 #include "harness/io/query_set_io.hpp"
 #include "harness/io/zip.hpp"
-#include "harness/run/compare.hpp"
+#include "harness/run/result_set.hpp"
 #include "harness/run/suite.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/printable.hpp"

@@ -8,6 +8,7 @@
 
 #include "harness/run/calibration.hpp"
 #include "harness/run/compare.hpp"
+#include "harness/run/mann_whitney.hpp"
 
 using namespace bvhbench;
 using json = nlohmann::json;

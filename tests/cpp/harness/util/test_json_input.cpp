@@ -7,7 +7,7 @@
 
 #include "harness/core/query_set.hpp"
 #include "harness/io/query_set_io.hpp"
-#include "harness/run/compare.hpp"
+#include "harness/run/result_set.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_input.hpp"
 #include "support/test_support.hpp"
