@@ -363,7 +363,7 @@ def is_coherent(key):
 def shown_configs(jobs):
     """[(method, params_key)] that stand for each method in scaling charts and tables: the
     representative configuration, plus its path-coherent variant (coherent=true) when the
-    suite ran one, since a coherent method is its own row (docs: ARCHITECTURE, Queries)."""
+    suite ran one, since a coherent method is its own row (docs/architecture.md, "Contracts": queries)."""
     reps = representative_configs(jobs)
     keys = {}
     for j in jobs:

@@ -1,7 +1,7 @@
 #pragma once
 /// Correctly rounded sin, cos and log, for the code whose output must be the same bytes on every
-/// machine: query-set generation (ARCHITECTURE.md: "the same seed and parameters produce the same
-/// bytes"; the CI gate pairs jobs by the query set's sha256).
+/// machine: query-set generation (docs/architecture.md: "the same seed and parameters give the
+/// same bytes on every machine"; the CI gate pairs jobs by the query set's sha256).
 ///
 /// Why not std::sin: glibc picks its libm kernels at run time (FMA variants on processors that
 /// have FMA), and its results are within 1 ulp but not always the nearest double, so the same call

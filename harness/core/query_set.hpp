@@ -1,5 +1,5 @@
 #pragma once
-/// Query sets (ARCHITECTURE.md, "Query sets"): NAME.npy (float64, N x 3) plus NAME.json with at
+/// Query sets (docs/architecture.md, "Contracts": query sets): NAME.npy (float64, N x 3) plus NAME.json with at
 /// least kind, n, seed, mesh_sha256 and the generator's parameters. Generation is deterministic:
 /// the same mesh, kind, n, seed and parameters give the same bytes on any machine.
 ///

@@ -1,5 +1,5 @@
 #pragma once
-/// Query sets on disk (ARCHITECTURE.md, "Query sets"): NAME.npy (float64, N x 3) plus NAME.json, the
+/// Query sets on disk (docs/architecture.md, "Contracts": query sets): NAME.npy (float64, N x 3) plus NAME.json, the
 /// sidecar, with at least kind, n, seed, mesh_sha256 and the generator's parameters; or points made
 /// elsewhere without a sidecar (kind `file`, see core/query_set.hpp).
 #include <cstddef>

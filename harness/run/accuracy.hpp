@@ -11,7 +11,7 @@
 
 namespace bvhbench {
 
-/// What a method answered, query by query, in query order (ARCHITECTURE.md, "Answers").
+/// What a method answered, query by query, in query order (docs/results.md, "Answers and oracle files").
 struct Answers {
   QueryType type = QueryType::inside;
   std::vector<std::uint8_t> inside;      ///< N, inside jobs

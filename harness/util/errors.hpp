@@ -1,6 +1,6 @@
 #pragma once
 /// Error kinds that cross the harness boundary. Each maps to a status and an exit code
-/// (ARCHITECTURE.md, "Exit codes"): anything thrown inside a method or a reader is caught in
+/// (docs/architecture.md, "Contracts": exit codes): anything thrown inside a method or a reader is caught in
 /// `run_job` / `main` and turned into a status row and a message, never a crash.
 #include <stdexcept>
 #include <string>
