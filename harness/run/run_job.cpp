@@ -23,6 +23,7 @@
 #include "harness/run/calibration.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/system_info.hpp"
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/printable.hpp"
 #include "harness/util/process_memory.hpp"
@@ -40,17 +41,14 @@ std::string dump_result(const json& j) {
 }
 
 void write_json_atomic(const std::string& path, const json& j) {
-  std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw file_error(path, "cannot open for writing");
-    f << dump_result(j) << "\n";
-    f.flush();
-    if (!f) throw file_error(path, "write failed (disk full?)");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw file_error(path, "cannot rename into place");
+  try {
+    AtomicOutputFile f(path);
+    f.write(dump_result(j) + "\n");
+    f.commit();
+  } catch (const std::runtime_error& e) {
+    // A result path the user gave (run --out, suite --out) that cannot be written is a bad value
+    // given by the user: exit code 2, as it always was.
+    throw InputError(printable(e.what()));
   }
 }
 

@@ -52,7 +52,8 @@ nlohmann::json make_result(const JobSpec& spec, const std::string& status_code,
 /// exception (messages and paths are made printable() before they get there).
 std::string dump_result(const nlohmann::json& j);
 
-/// Writes JSON to path atomically (PATH.tmp then rename), pretty-printed (dump_result).
+/// Writes JSON to path atomically (AtomicOutputFile), pretty-printed (dump_result). Throws
+/// InputError "PATH: cannot write: <why>" when it cannot.
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
 }  // namespace bvhbench
