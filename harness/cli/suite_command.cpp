@@ -390,7 +390,7 @@ void add_suite_command(CLI::App& app) {
       auto tj = std::chrono::steady_clock::now();
       JobSpec spec;
       spec.mesh_path = j.mesh.path;
-      spec.method_spec = j.method_spec;
+      spec.method = j.method;
       spec.query_type = j.query;
       spec.repeat = cfg.repeat;
       json result;
@@ -406,7 +406,7 @@ void add_suite_command(CLI::App& app) {
       } else {
         spec.truth_path = prepare_truth(j, npy);
         if (g_interrupted) break;
-        std::vector<std::string> args = {exe, "--quiet", "run", "--mesh", spec.mesh_path, "--method", spec.method_spec,
+        std::vector<std::string> args = {exe, "--quiet", "run", "--mesh", spec.mesh_path, "--method", spec.method.text,
                                          "--queries", spec.queries_path, "--query", to_string(spec.query_type),
                                          "--repeat", std::to_string(spec.repeat), "--out", child_path};
         if (!spec.truth_path.empty()) {

@@ -6,12 +6,15 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/core/method.hpp"
+#include "harness/core/method_spec.hpp"
 
 namespace bvhbench {
 
 struct JobSpec {
   std::string mesh_path;
-  std::string method_spec;   ///< "NAME" or "NAME:k=v,..."
+  /// The method, resolved where its text entered (Registry::describe); an unresolved one makes
+  /// the job's result rejected_input with the spec's problem.
+  MethodSpec method;
   std::string queries_path;  ///< .npy with its .json sidecar
   QueryType query_type = QueryType::inside;
   int repeat = 5;            ///< timed passes after the warm-up
