@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <chrono>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "harness/run/child_process.hpp"
@@ -53,12 +55,12 @@ TEST(ChildProcess, ACrashIsItsSignal) {
 TEST(ChildProcess, TheTimeLimitKillsTheChildAndWhatItStarted) {
   TmpDir d;
   const std::string marker = d.file("grandchild_survived");
-  const ChildOutcome o = shell("(sleep 2; touch " + marker + ") & sleep 30", d, {0.3, 0});
+  const ChildOutcome o = shell("(sleep 1; touch " + marker + ") & sleep 30", d, {0.3, 0});
   EXPECT_TRUE(o.timed_out);
   EXPECT_FALSE(o.exited);
   EXPECT_EQ(o.signal, SIGKILL);
   EXPECT_LT(o.seconds, 10.0);
-  ::sleep(3);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // past the grandchild's touch
   EXPECT_FALSE(std::filesystem::exists(marker)) << "the grandchild outlived the time limit";
 }
 
