@@ -11,6 +11,7 @@ import json
 import os
 import re
 import sys
+import tempfile
 from collections import OrderedDict
 
 import result_schema
@@ -309,12 +310,26 @@ def load(root):
 
 
 def write_atomic(path, text):
-    """Write a text file as the harness does: to path.tmp, then renamed, so that a reader never
-    sees half a file."""
-    tmp = path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    """Write a text file as the harness does (harness/util/atomic_file.hpp): to a temporary of
+    its own in the same folder, then renamed, so that a reader never sees half a file and two
+    writers of one path never share a temporary."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=os.path.basename(path) + ".tmp.")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _summary_ids(path):

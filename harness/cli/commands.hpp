@@ -12,12 +12,12 @@ struct ExitCode {
   int code;
 };
 
-void add_methods_command(CLI::App& app);  // cli_common.cpp
-void add_queries_command(CLI::App& app);  // query_set.cpp
-void add_run_command(CLI::App& app);      // run_job.cpp
-void add_suite_command(CLI::App& app);    // suite.cpp
-void add_truth_command(CLI::App& app);    // truth.cpp
-void add_compare_command(CLI::App& app);  // compare.cpp
-void add_mesh_info_command(CLI::App& app);  // mesh_info.cpp
+void add_methods_command(CLI::App& app);    // methods_command.cpp
+void add_queries_command(CLI::App& app);    // queries_command.cpp
+void add_run_command(CLI::App& app);        // run_command.cpp
+void add_suite_command(CLI::App& app);      // suite_command.cpp
+void add_truth_command(CLI::App& app);      // truth_command.cpp
+void add_compare_command(CLI::App& app);    // compare_command.cpp
+void add_mesh_info_command(CLI::App& app);  // mesh_info_command.cpp
 
 }  // namespace bvhbench

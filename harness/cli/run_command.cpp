@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/cli/commands.hpp"
+#include "harness/core/registry.hpp"
 #include "harness/run/run_job.hpp"
 
 using json = nlohmann::json;
@@ -22,9 +23,10 @@ void add_run_command(CLI::App& app) {
   auto query = std::make_shared<std::string>("inside");
   auto budget_mb = std::make_shared<double>(0);
   auto quiet = std::make_shared<bool>(false);
+  auto method = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand("run", "Run one job: build one method on one mesh, replay one query set");
   cmd->add_option("--mesh", spec->mesh_path, "Mesh (PLY, OBJ, STL or OFF)")->required();
-  cmd->add_option("--method", spec->method_spec, "NAME or NAME:key=value,...")->required();
+  cmd->add_option("--method", *method, "NAME or NAME:key=value,...")->required();
   cmd->add_option("--queries", spec->queries_path,
                   "Query set: .npy from bvhbench queries (with its .json sidecar), or points made "
                   "elsewhere: .npy (float64/float32, N x 3) or .xyz/.csv text, one point a line")
@@ -40,6 +42,8 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--deadline-ns", spec->deadline_ns, "Per-query deadline (haptic loop: 1e6 ns)");
   cmd->add_flag("--quiet", *quiet, "No progress on stderr");
   cmd->callback([=] {
+    // Parsed once, here; a spec that cannot be resolved is the job's rejected_input result.
+    spec->method = Registry::global().describe(*method);
     spec->query_type = parse_query_type(*query);
     spec->memory_budget_bytes = std::size_t(*budget_mb * 1024 * 1024);
     spec->progress = !*quiet;

@@ -159,29 +159,4 @@ std::string Params::non_default_string() const {
   return s;
 }
 
-void parse_method_spec(const std::string& spec, std::string* name,
-                       std::map<std::string, std::string>* given) {
-  given->clear();
-  auto colon = spec.find(':');
-  *name = spec.substr(0, colon);
-  if (name->empty()) throw InputError("method spec '" + spec + "': empty method name");
-  if (colon == std::string::npos) return;
-  std::string rest = spec.substr(colon + 1);
-  std::size_t pos = 0;
-  while (pos <= rest.size()) {
-    std::size_t comma = rest.find(',', pos);
-    std::string pair = rest.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    if (!pair.empty()) {
-      auto eq = pair.find('=');
-      if (eq == std::string::npos || eq == 0)
-        throw InputError("method spec '" + spec + "': '" + pair + "' is not key=value");
-      std::string k = pair.substr(0, eq), v = pair.substr(eq + 1);
-      if (given->count(k)) throw InputError("method spec '" + spec + "': '" + k + "' given twice");
-      (*given)[k] = v;
-    }
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
-  }
-}
-
 }  // namespace bvhbench

@@ -1,6 +1,6 @@
 #pragma once
 /// Method parameters: declared by each method (name, type, default, help), chosen on the
-/// command line as `NAME:key=value,key=value`, validated before anything is built.
+/// command line as `NAME:key=value,key=value` (method_spec.hpp), validated before anything is built.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -45,11 +45,6 @@ class Params {
   std::map<std::string, std::string> given_;
   std::map<std::string, std::string> defaults_;
 };
-
-/// Splits "NAME:k=v,k=v" into NAME and its key/value map. Throws InputError on a malformed spec
-/// (empty name, a pair without '=', a key given twice).
-void parse_method_spec(const std::string& spec, std::string* name,
-                       std::map<std::string, std::string>* given);
 
 bool parse_bool(const std::string& s, bool* out);  ///< 1/0, true/false, yes/no, on/off
 

@@ -32,24 +32,45 @@ const MethodInfo* Registry::find(const std::string& name) const {
   return nullptr;
 }
 
-std::unique_ptr<Method> Registry::create(const std::string& spec, const MethodInfo** info,
-                                         Params* resolved) const {
-  std::string name;
-  std::map<std::string, std::string> given;
-  parse_method_spec(spec, &name, &given);
-  const MethodInfo* m = find(name);
+MethodSpec Registry::describe(const std::string& text) const {
+  MethodSpec spec;
+  try {
+    spec = parse_method_spec(text);
+  } catch (const InputError& e) {
+    spec.text = spec.name = text;
+    spec.problem = e.what();
+    return spec;
+  }
+  const MethodInfo* m = find(spec.name);
   if (!m) {
     std::string known;
     for (auto& k : methods_)
       if (!k.testing_only) known += (known.empty() ? "" : ", ") + k.name;
-    throw InputError("unknown method '" + name + "' (known: " + known + ")");
+    spec.problem = "unknown method '" + spec.name + "' (known: " + known + ")";
+    return spec;
   }
-  Params p = Params::resolve(name, m->params, given);
-  auto method = m->create(p);
-  if (info) *info = m;
-  if (resolved) *resolved = p;
-  return method;
+  try {
+    spec.params = Params::resolve(spec.name, m->params, spec.given);
+  } catch (const InputError& e) {
+    spec.problem = e.what();
+    return spec;
+  }
+  spec.info = m;
+  return spec;
 }
+
+MethodSpec Registry::resolve(const std::string& text) const {
+  MethodSpec spec = describe(text);
+  if (!spec.resolved()) throw InputError(spec.problem);
+  return spec;
+}
+
+std::unique_ptr<Method> Registry::create(const MethodSpec& spec) const {
+  if (!spec.resolved()) throw InputError(spec.problem.empty() ? "method spec '" + spec.text + "' is not resolved" : spec.problem);
+  return spec.info->create(spec.params);
+}
+
+std::unique_ptr<Method> Registry::create(const std::string& text) const { return create(resolve(text)); }
 
 const Registry& Registry::global() {
   static const Registry r = [] {

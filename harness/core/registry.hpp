@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "harness/core/method.hpp"
+#include "harness/core/method_spec.hpp"
 
 namespace CLI { class App; }
 
@@ -47,10 +48,20 @@ class Registry {
   const std::vector<MethodInfo>& methods() const { return methods_; }
   const std::vector<CommandInfo>& commands() const { return commands_; }
 
-  /// Parses "NAME:k=v,..." and creates the method. Throws InputError for an unknown method
-  /// (listing the known ones) or a bad parameter. `resolved` receives the full parameter set.
-  std::unique_ptr<Method> create(const std::string& spec, const MethodInfo** info = nullptr,
-                                 Params* resolved = nullptr) const;
+  /// Parses `text` ("NAME:k=v,...", method_spec.hpp) and resolves it against this registry:
+  /// the method and its full, validated parameter set. Never throws for bad text: a spec that
+  /// cannot be parsed, names an unknown method or gives a bad parameter comes back unresolved
+  /// with its `problem` (the message resolve() throws) and as much of name and given as was read.
+  MethodSpec describe(const std::string& text) const;
+  /// describe(), but throws InputError(problem) for a spec it cannot resolve: the parser's
+  /// message, "unknown method 'X' (known: ...)", or the parameter's "method X: parameter ...".
+  MethodSpec resolve(const std::string& text) const;
+
+  /// Creates the method of a spec resolved against this registry. Throws InputError(problem)
+  /// for an unresolved one.
+  std::unique_ptr<Method> create(const MethodSpec& spec) const;
+  /// create(resolve(text)): for tests and tools that name a method in code.
+  std::unique_ptr<Method> create(const std::string& text) const;
 
   /// The registry with every method compiled into this build.
   static const Registry& global();

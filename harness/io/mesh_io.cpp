@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "harness/util/atomic_file.hpp"
+
 namespace bvhbench {
 
 namespace {
@@ -49,15 +51,12 @@ Mesh load_mesh_bytes(std::string_view data, const std::string& name, const std::
 // Writer.
 // ---------------------------------------------------------------------------------------------
 void write_ply(const std::string& path, const Mesh& mesh, bool ascii) {
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
+  AtomicOutputFile f(path);
   std::string buf;
   buf.reserve(kChunk + 256);
-  bool ok = true;
   auto flush = [&](bool force) {
     if (buf.size() >= kChunk || (force && !buf.empty())) {
-      ok = ok && std::fwrite(buf.data(), 1, buf.size(), f) == buf.size();
+      f.write(buf);
       buf.clear();
     }
   };
@@ -109,12 +108,7 @@ void write_ply(const std::string& path, const Mesh& mesh, bool ascii) {
     flush(false);
   }
   flush(true);
-  ok = (std::fclose(f) == 0) && ok;
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot write: " + why);
-  }
+  f.commit();
 }
 
 }  // namespace bvhbench

@@ -10,6 +10,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/binary_file.hpp"
 #include "harness/util/errors.hpp"
 

@@ -69,7 +69,7 @@ NpyArray read_npy(const std::string& path, NpyOrder order = NpyOrder::c_only);
 /// data size that does not match dtype and shape).
 std::string npy_header(const NpyArray& a);
 std::string npy_bytes(const NpyArray& a);  ///< npy_header(a) followed by the data
-/// Writes atomically (to PATH.tmp, then rename).
+/// Writes atomically (AtomicOutputFile: a temporary beside PATH, then rename).
 void write_npy(const std::string& path, const NpyArray& a);
 
 /// Reads an (N, 3) array of points: float64 or float32 (widened exactly), either byte order,

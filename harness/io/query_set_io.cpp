@@ -8,6 +8,7 @@
 
 #include "harness/io/npy.hpp"
 #include "harness/io/points_text.hpp"
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_input.hpp"
 #include "harness/util/sha256.hpp"
@@ -82,15 +83,9 @@ void write_query_set(const std::string& npy_path, const std::vector<Vec3d>& poin
   meta["n"] = points.size();
   if (!meta.contains("created_by")) meta["created_by"] = "bvhbench queries";
   write_npy(npy_path, NpyArray::f8_n3(points));
-  std::string side = sidecar_path(npy_path);
-  std::string tmp = side + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw file_error(side, "cannot write");
-    f << meta.dump(2) << "\n";
-    if (!f) throw file_error(side, "write failed");
-  }
-  if (std::rename(tmp.c_str(), side.c_str()) != 0) throw file_error(side, "cannot rename into place");
+  AtomicOutputFile side(sidecar_path(npy_path));
+  side.write(meta.dump(2) + "\n");
+  side.commit();
 }
 
 }  // namespace bvhbench

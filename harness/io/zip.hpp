@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/binary_file.hpp"
 
 namespace bvhbench {
@@ -86,7 +87,7 @@ class ZipReader {
   bool verify_crc_ = true;
 };
 
-/// A ZIP file of stored entries, written to PATH.tmp and renamed into place by commit(). The
+/// A ZIP file of stored entries, written to a temporary and renamed into place by commit(). The
 /// bytes depend on the entries alone (fixed 1980-01-01 timestamps), so equal input gives equal
 /// files.
 class ZipWriter {

@@ -23,6 +23,7 @@
 #include "harness/run/calibration.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/system_info.hpp"
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/printable.hpp"
 #include "harness/util/process_memory.hpp"
@@ -40,45 +41,32 @@ std::string dump_result(const json& j) {
 }
 
 void write_json_atomic(const std::string& path, const json& j) {
-  std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw file_error(path, "cannot open for writing");
-    f << dump_result(j) << "\n";
-    f.flush();
-    if (!f) throw file_error(path, "write failed (disk full?)");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw file_error(path, "cannot rename into place");
+  try {
+    AtomicOutputFile f(path);
+    f.write(dump_result(j) + "\n");
+    f.commit();
+  } catch (const std::runtime_error& e) {
+    // A result path the user gave (run --out, suite --out) that cannot be written is a bad value
+    // given by the user: exit code 2, as it always was.
+    throw InputError(printable(e.what()));
   }
 }
 
 json job_block(const JobSpec& spec) {
   json j;
-  std::string name;
-  std::map<std::string, std::string> given;
-  try {
-    parse_method_spec(spec.method_spec, &name, &given);
-  } catch (...) {
-    name = spec.method_spec;
+  const MethodSpec& m = spec.method;
+  j["method"] = printable(m.name);
+  j["method_spec"] = printable(m.text);
+  // The resolved parameters when there are, so that status rows written without running the job
+  // (a crash, a query set that could not be made) pair and group like the job's own rows.
+  if (m.resolved()) {
+    j["params"] = m.params.values();
+  } else {
+    json given_json = json::object();
+    for (const auto& [k, v] : m.given) given_json[printable(k)] = printable(v);
+    j["params"] = given_json;
   }
-  j["method"] = printable(name);
-  j["method_spec"] = printable(spec.method_spec);
-  json given_json = json::object();
-  for (const auto& [k, v] : given) given_json[printable(k)] = printable(v);
-  j["params"] = given_json;
-  j["params_key"] = "";
-  // Resolve the parameters when the method is known, so that status rows written without running
-  // the job (a crash, a query set that could not be made) pair and group like the job's own rows.
-  if (const MethodInfo* info = Registry::global().find(name)) {
-    try {
-      Params p = Params::resolve(name, info->params, given);
-      j["params"] = p.values();
-      j["params_key"] = p.non_default_string();
-    } catch (const std::exception&) {
-    }
-  }
+  j["params_key"] = m.params_key();
   j["query"] = to_string(spec.query_type);
   // Paths are the user's bytes (a Linux file name need not be UTF-8); JSON needs UTF-8.
   j["mesh"] = {{"path", printable(spec.mesh_path)}};
@@ -150,9 +138,9 @@ json run_job(const JobSpec& spec) {
   try {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 std::max(1, spec.threads));
-    const MethodInfo* info = nullptr;
-    Params params;
-    auto method = Registry::global().create(spec.method_spec, &info, &params);
+    auto method = Registry::global().create(spec.method);
+    const MethodInfo* info = spec.method.info;
+    const Params& params = spec.method.params;
     r["job"]["method"] = info->name;
     r["job"]["params"] = params.values();
     r["job"]["params_key"] = params.non_default_string();

@@ -1,17 +1,20 @@
 #pragma once
 /// One job: load the mesh, build one method, replay one query set, measure, write the result
-/// JSON of the contract (ARCHITECTURE.md, "Results") and optionally the answers.
+/// JSON of the contract (docs/results.md) and optionally the answers.
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "harness/core/method.hpp"
+#include "harness/core/method_spec.hpp"
 
 namespace bvhbench {
 
 struct JobSpec {
   std::string mesh_path;
-  std::string method_spec;   ///< "NAME" or "NAME:k=v,..."
+  /// The method, resolved where its text entered (Registry::describe); an unresolved one makes
+  /// the job's result rejected_input with the spec's problem.
+  MethodSpec method;
   std::string queries_path;  ///< .npy with its .json sidecar
   QueryType query_type = QueryType::inside;
   int repeat = 5;            ///< timed passes after the warm-up
@@ -52,7 +55,8 @@ nlohmann::json make_result(const JobSpec& spec, const std::string& status_code,
 /// exception (messages and paths are made printable() before they get there).
 std::string dump_result(const nlohmann::json& j);
 
-/// Writes JSON to path atomically (PATH.tmp then rename), pretty-printed (dump_result).
+/// Writes JSON to path atomically (AtomicOutputFile), pretty-printed (dump_result). Throws
+/// InputError "PATH: cannot write: <why>" when it cannot.
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
 }  // namespace bvhbench

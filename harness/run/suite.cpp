@@ -1,37 +1,19 @@
+// Reading a suite file: the YAML parsed, checked and expanded into its jobs (suite.hpp).
 #include "harness/run/suite.hpp"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <chrono>
+#include <cctype>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <iterator>
-#include <regex>
 #include <set>
 #include <sstream>
-#include <thread>
 
-#include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "harness/core/query_set.hpp"
 #include "harness/core/registry.hpp"
-#include "harness/io/query_set_io.hpp"
-#include "harness/run/run_job.hpp"
 #include "harness/util/errors.hpp"
-#include "harness/util/json_path.hpp"
-#include "harness/util/progress.hpp"
 #include "harness/util/sha256.hpp"
 
 namespace fs = std::filesystem;
@@ -234,31 +216,15 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
         yaml_error(path, n, e.what());
       }
     }
-    std::vector<std::string> methods;
+    std::vector<MethodSpec> methods;
     for (auto n : as_list(m["methods"]))
       for (auto& s : expand_method(path, n)) {
-        // Validate now: a typo in a suite is bad input, not 40 failed jobs.
-        std::string name;
-        std::map<std::string, std::string> given;
+        // Parsed and resolved once, now: a typo in a suite is bad input, not 40 failed jobs.
         try {
-          parse_method_spec(s, &name, &given);
+          methods.push_back(Registry::global().resolve(s));
         } catch (const InputError& e) {
           yaml_error(path, n, e.what());
         }
-        const MethodInfo* info = Registry::global().find(name);
-        if (!info) {
-          try {
-            Registry::global().create(s);
-          } catch (const InputError& e) {
-            yaml_error(path, n, e.what());
-          }
-        }
-        try {
-          Params::resolve(name, info->params, given);
-        } catch (const InputError& e) {
-          yaml_error(path, n, e.what());
-        }
-        methods.push_back(s);
         if (methods.size() > kMaxSuiteJobs)
           yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
       }
@@ -275,8 +241,8 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
             j.mesh = mesh;
             j.queries = q;
             j.query = t;
-            j.method_spec = spec;
-            j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec);
+            j.method = spec;
+            j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec.text);
             if (j.id.size() > 200) j.id = j.id.substr(0, 180) + "-" + sha256_hex(j.id.data(), j.id.size()).substr(0, 12);
             if (seen.insert(j.id).second) cfg.jobs.push_back(j);
           }

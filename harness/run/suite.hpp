@@ -1,7 +1,7 @@
 #pragma once
-/// Suites: a YAML matrix of jobs (suites/*.yml), each run in its own child process with a time
-/// limit and an address-space limit, so that a crash, a hang or a blow-up becomes a status row.
-/// Format: see suites/README.md.
+/// Suites: a YAML matrix of jobs (suites/*.yml), read and expanded into job plans here, run by
+/// suite_runner.hpp (each job in its own child process with a time limit and an address-space
+/// limit, so that a crash, a hang or a blow-up becomes a status row). Format: suites/README.md.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/core/method.hpp"
+#include "harness/core/method_spec.hpp"
 
 namespace bvhbench {
 
@@ -35,7 +36,7 @@ struct JobPlan {
   MeshPlan mesh;
   QueryPlan queries;
   QueryType query = QueryType::inside;
-  std::string method_spec;
+  MethodSpec method;  ///< resolved when the suite was read
 };
 
 struct SuiteConfig {

@@ -1,11 +1,10 @@
 #include "harness/run/summary_csv.hpp"
 
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "harness/run/result_schema.hpp"
-#include "harness/util/errors.hpp"
+#include "harness/util/atomic_file.hpp"
 #include "harness/util/json_path.hpp"
 
 namespace fs = std::filesystem;
@@ -82,18 +81,16 @@ std::vector<std::string> summary_row(const json& r) {
 }
 
 void write_summary_csv(const std::string& path, const std::vector<json>& results) {
-  std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw file_error(path, "cannot write");
-    auto line = [&](const std::vector<std::string>& cells) {
-      for (std::size_t i = 0; i < cells.size(); ++i) f << (i ? "," : "") << cells[i];
-      f << "\n";
-    };
-    line(summary_header());
-    for (auto& r : results) line(summary_row(r));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw file_error(path, "cannot rename into place");
+  std::string text;
+  auto line = [&](const std::vector<std::string>& cells) {
+    for (std::size_t i = 0; i < cells.size(); ++i) text += (i ? "," : "") + cells[i];
+    text += "\n";
+  };
+  line(summary_header());
+  for (auto& r : results) line(summary_row(r));
+  AtomicOutputFile f(path);
+  f.write(text);
+  f.commit();
 }
 
 }  // namespace bvhbench

@@ -4,7 +4,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <stdexcept>
 #include <utility>
 
 #include "harness/util/errors.hpp"
@@ -38,33 +37,6 @@ void InputFile::read_at(std::uint64_t offset, void* out, std::size_t n, const st
   }
   if (fseeko(f_, off_t(offset), SEEK_SET) != 0 || std::fread(out, 1, n, f_) != n)
     throw file_error(path_, "read error in " + what);
-}
-
-AtomicOutputFile::AtomicOutputFile(const std::string& path) : path_(path), tmp_(path + ".tmp") {
-  f_ = std::fopen(tmp_.c_str(), "wb");
-  if (!f_) throw std::runtime_error(path_ + ": cannot write: " + std::strerror(errno));
-}
-
-AtomicOutputFile::~AtomicOutputFile() {
-  if (f_) {
-    std::fclose(f_);
-    std::remove(tmp_.c_str());
-  }
-}
-
-void AtomicOutputFile::write(const void* data, std::size_t n) {
-  if (n && std::fwrite(data, 1, n, f_) != n) ok_ = false;
-  offset_ += n;
-}
-
-void AtomicOutputFile::commit() {
-  const bool closed = std::fclose(f_) == 0;
-  f_ = nullptr;
-  if (!ok_ || !closed || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp_.c_str());
-    throw std::runtime_error(path_ + ": cannot write: " + why);
-  }
 }
 
 }  // namespace bvhbench

@@ -1,7 +1,7 @@
 #pragma once
-/// Binary files read at offsets and written atomically: the plumbing under the .npy and ZIP
-/// (.npz) readers and writers, which move arrays of hundreds of MB straight between a file and
-/// their final buffer.
+/// Binary files read at offsets: the plumbing under the .npy and ZIP (.npz) readers, which move
+/// arrays of hundreds of MB straight from a file into their final buffer. (Their writers use
+/// atomic_file.hpp.)
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -34,28 +34,6 @@ class InputFile {
   std::FILE* f_ = nullptr;       // null for bytes in memory
   const char* data_ = nullptr;   // bytes in memory
   std::uint64_t size_ = 0;
-};
-
-/// A file written to PATH.tmp and renamed to PATH by commit(); without commit() (an exception
-/// on the way) the temporary file is removed and PATH is left as it was. Errors are
-/// std::runtime_error "PATH: cannot write: <why>" (an output problem, not bad input).
-class AtomicOutputFile {
- public:
-  explicit AtomicOutputFile(const std::string& path);
-  ~AtomicOutputFile();
-  AtomicOutputFile(const AtomicOutputFile&) = delete;
-  AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
-
-  void write(const void* data, std::size_t n);
-  void write(const std::string& s) { write(s.data(), s.size()); }
-  std::uint64_t offset() const { return offset_; }  ///< bytes written so far
-  void commit();
-
- private:
-  std::string path_, tmp_;
-  std::FILE* f_ = nullptr;
-  bool ok_ = true;
-  std::uint64_t offset_ = 0;
 };
 
 }  // namespace bvhbench

@@ -83,6 +83,23 @@ inline std::string read_file_bytes(const std::string& path) {
   return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
+/// The temporaries an atomic writer of `path` left in its folder (AtomicOutputFile names them
+/// "PATH.tmp.<random>"; older writers used "PATH.tmp"): file names, sorted.
+inline std::vector<std::string> leftover_temporaries(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  const std::string prefix = p.filename().string() + ".tmp";
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.compare(0, prefix.size(), prefix) == 0) out.push_back(n);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 /// Replaces the file at `path` with exactly `bytes`.
 inline void write_file_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream f(path, std::ios::binary);

@@ -1,4 +1,4 @@
-// Method specs and parameters: parsing, defaults, validation, the registry's errors.
+// Method parameters: defaults, validation, the registry's errors (method specs: test_method_spec.cpp).
 #include <gtest/gtest.h>
 
 #include "harness/core/params.hpp"
@@ -15,33 +15,6 @@ const std::vector<ParamSpec> kSpecs = {
     {"mode", ParamType::choice, "a", "mode", {"a", "b"}},
     {"name", ParamType::text, "", "free text", {}},
 };
-}
-
-TEST(MethodSpec, NameOnly) {
-  std::string name;
-  std::map<std::string, std::string> kv;
-  parse_method_spec("brute_force", &name, &kv);
-  EXPECT_EQ(name, "brute_force");
-  EXPECT_TRUE(kv.empty());
-}
-
-TEST(MethodSpec, KeyValues) {
-  std::string name;
-  std::map<std::string, std::string> kv;
-  parse_method_spec("m:a=1,b=x y", &name, &kv);
-  EXPECT_EQ(name, "m");
-  ASSERT_EQ(kv.size(), 2u);
-  EXPECT_EQ(kv["a"], "1");
-  EXPECT_EQ(kv["b"], "x y");
-}
-
-TEST(MethodSpec, Malformed) {
-  std::string name;
-  std::map<std::string, std::string> kv;
-  EXPECT_THROW(parse_method_spec(":a=1", &name, &kv), InputError);
-  EXPECT_THROW(parse_method_spec("m:a", &name, &kv), InputError);
-  EXPECT_THROW(parse_method_spec("m:=1", &name, &kv), InputError);
-  EXPECT_THROW(parse_method_spec("m:a=1,a=2", &name, &kv), InputError);
 }
 
 TEST(Params, DefaultsAndOverrides) {
@@ -75,12 +48,11 @@ TEST(Registry, KnowsBruteForceAndRejectsUnknown) {
   ASSERT_NE(r.find("brute_force"), nullptr);
   EXPECT_THROW(r.create("no_such_method"), InputError);
   EXPECT_THROW(r.create("brute_force:bogus=1"), InputError);
-  const MethodInfo* info = nullptr;
-  Params p;
-  auto m = r.create("brute_force:winding_threshold=0.25", &info, &p);
+  const MethodSpec spec = r.resolve("brute_force:winding_threshold=0.25");
+  auto m = r.create(spec);
   ASSERT_TRUE(m);
-  EXPECT_EQ(info->name, "brute_force");
-  EXPECT_DOUBLE_EQ(p.get_real("winding_threshold"), 0.25);
+  EXPECT_EQ(spec.info->name, "brute_force");
+  EXPECT_DOUBLE_EQ(spec.params.get_real("winding_threshold"), 0.25);
 }
 
 TEST(Registry, EveryMethodDeclaresSaneParameters) {

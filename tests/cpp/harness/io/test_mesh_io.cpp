@@ -498,8 +498,7 @@ TEST(MeshIo, WritePlyRoundTripsBinaryAndAscii) {
     for (std::size_t i = 0; i < m.vertices.size(); ++i)
       for (int k = 0; k < 3; ++k) EXPECT_EQ(r.vertices[i][k], double(float(m.vertices[i][k])));
     EXPECT_EQ(r.file.polygons, 3u);
-    std::ifstream tmp(path + ".tmp");
-    EXPECT_FALSE(tmp.good()) << "the temporary file was left behind";
+    EXPECT_TRUE(leftover_temporaries(path).empty()) << "the temporary file was left behind";
     std::remove(path.c_str());
   }
 }

@@ -138,8 +138,7 @@ TEST(Npy, PointsRoundTrip) {
   const std::string path = temp_path("points.npy");
   write_npy(path, NpyArray::f8_n3(pts));
   EXPECT_EQ(read_points_npy(path), pts);
-  std::ifstream tmp(path + ".tmp");
-  EXPECT_FALSE(tmp.good()) << "the temporary file was left behind";
+  EXPECT_TRUE(leftover_temporaries(path).empty()) << "the temporary file was left behind";
   std::remove(path.c_str());
 }
 

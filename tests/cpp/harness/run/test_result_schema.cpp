@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <string>
 
+#include "harness/core/registry.hpp"
 #include "harness/run/result_schema.hpp"
 #include "harness/run/run_job.hpp"
 #include "harness/run/summary_csv.hpp"
@@ -30,7 +31,7 @@ json status_row() {
   JobSpec spec;
   spec.mesh_path = "m.ply";
   spec.queries_path = "q.npy";
-  spec.method_spec = "brute_force";
+  spec.method = Registry::global().resolve("brute_force");
   return make_result(spec, status::crash, "killed by signal 11");
 }
 

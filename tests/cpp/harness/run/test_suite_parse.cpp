@@ -31,7 +31,7 @@ TEST(SuiteParse, AGoodSuiteExpands) {
   ASSERT_EQ(cfg.jobs.size(), 6u);
   EXPECT_EQ(cfg.jobs[0].id, "m__random-n10000-s1__inside__brute_force");
   EXPECT_EQ(cfg.jobs[0].mesh.path, "dir/m.ply");
-  EXPECT_EQ(cfg.jobs[1].method_spec, "ebp_octree:leaf_factor=3");
+  EXPECT_EQ(cfg.jobs[1].method.text, "ebp_octree:leaf_factor=3");
 }
 
 // A map or a list where a string is read: yaml-cpp's BadConversion escaped (found by fuzz_suite).

@@ -1,0 +1,40 @@
+#pragma once
+/// A command run in a child process with a wall-clock limit and an address-space limit, so that
+/// a crash, a hang or a blow-up of what it runs (a job, a query generator, the oracle) ends the
+/// child, not the caller. Linux: fork/exec, a process group, PR_SET_PDEATHSIG, RLIMIT_AS.
+#include <string>
+#include <vector>
+
+namespace bvhbench {
+
+struct ChildLimits {
+  double timeout_s = 600;         ///< wall clock; the child's process group is SIGKILLed after it
+  double memory_limit_mb = 0;     ///< RLIMIT_AS in MiB; 0 (or beyond what rlim_t holds): none
+};
+
+/// How a child ended.
+struct ChildOutcome {
+  bool exited = false;     ///< it called exit(): exit_code holds its code
+  int exit_code = 0;
+  int signal = 0;          ///< the signal that killed it, when it did not exit
+  bool timed_out = false;  ///< killed (SIGKILL) for exceeding the time limit
+  double seconds = 0;      ///< wall clock from fork to its end
+  std::string stderr_tail; ///< the last 2000 bytes of its output, trailing blanks trimmed
+};
+
+/// Runs `args` (args[0] an executable path, no PATH search) and waits for it. The child gets
+/// its own process group, so that a timeout or an interrupt kills whatever it started too; it
+/// dies with the caller (PR_SET_PDEATHSIG: a SIGKILLed runner must not leave jobs writing
+/// results); it writes no core file; its stdout and stderr go to the file `log_path`. Throws
+/// std::runtime_error only if fork() fails; an exec that fails is exit code 127.
+ChildOutcome run_child(const std::vector<std::string>& args, const ChildLimits& limits,
+                       const std::string& log_path);
+
+/// SIGKILLs the process group of the child run_child() is waiting for, if any. Async-signal-safe:
+/// it is what an interrupt handler calls (interrupt.hpp).
+void kill_running_child() noexcept;
+
+/// The path of this program (/proc/self/exe): the runner starts its children as itself.
+std::string self_exe();
+
+}  // namespace bvhbench

@@ -1,0 +1,30 @@
+#include "harness/run/job_executor.hpp"
+
+#include <fstream>
+
+namespace bvhbench {
+
+bool read_result_file(const std::string& path, nlohmann::json* out) {
+  std::ifstream f(path);
+  if (!f) return false;
+  try {
+    *out = nlohmann::json::parse(f);
+    return out->is_object() && out->contains("status");
+  } catch (...) {
+    return false;
+  }
+}
+
+std::vector<std::string> run_command_line(const std::string& exe, const JobTask& task) {
+  const JobSpec& spec = task.spec;
+  std::vector<std::string> args = {exe, "--quiet", "run", "--mesh", spec.mesh_path, "--method", spec.method.text,
+                                   "--queries", spec.queries_path, "--query", to_string(spec.query_type),
+                                   "--repeat", std::to_string(spec.repeat), "--out", task.child_result_path};
+  if (!spec.truth_path.empty()) {
+    args.push_back("--truth");
+    args.push_back(spec.truth_path);
+  }
+  return args;
+}
+
+}  // namespace bvhbench

@@ -1,0 +1,71 @@
+#pragma once
+/// How the suite runner (suite_runner.hpp) has its jobs executed: the seam between the loop
+/// (which jobs, in which order, --resume, the runs/ layout, summary.csv) and where a job runs.
+/// LocalJobExecutor (local_job_executor.hpp) runs each in a child process on this machine; an
+/// executor that runs them on other workers (a Dask cluster) implements the same interface.
+///
+/// What an executor must do:
+/// - run each submitted job as `bvhbench run` with the task's arguments in its own child process
+///   under the task's limits (child_process.hpp semantics: a crash, a hang, a blow-up is the
+///   job's status, never the executor's or the runner's end);
+/// - hand back, from collect(), the job's own result JSON, or the status row made from how its
+///   child ended (job_status.hpp: status_row) when it left none; the runner adds the job's
+///   identity and writes it atomically to runs/ID.json, so executors write nothing there;
+/// - while a job runs, it may keep its result at task.child_result_path (runs/ID.json.child):
+///   a result found there by `--resume` is adopted, so a job that finished when the runner was
+///   killed is not run again. A remote executor that cannot write there simply does not;
+/// - on an interrupt (interrupt.hpp: interrupted()), stop what runs and report each unfinished
+///   job with kept = false: the runner records it as not done, and --resume runs it again.
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "harness/run/child_process.hpp"
+#include "harness/run/run_job.hpp"
+#include "harness/run/suite.hpp"
+
+namespace bvhbench {
+
+/// One job, ready to run: its query set and oracle exist (suite_data.hpp).
+struct JobTask {
+  std::size_t index = 0;             ///< its place among the jobs of this invocation
+  JobPlan plan;
+  JobSpec spec;                      ///< what `bvhbench run` gets (method text, paths, repeat)
+  ChildLimits limits;
+  std::string child_result_path;     ///< runs/ID.json.child: where a child may leave its result
+  std::string log_path;              ///< logs/ID.log: the child's output
+};
+
+/// A job that ended.
+struct JobFinished {
+  JobTask task;
+  nlohmann::json result;   ///< the job's result or its status row (elapsed_seconds set)
+  bool kept = true;        ///< false: an interrupt stopped it; no result to record
+};
+
+class JobExecutor {
+ public:
+  virtual ~JobExecutor() = default;
+  /// How many jobs may be submitted and not yet collected; the runner prepares no more than
+  /// that ahead of the ones running. At least 1.
+  virtual std::size_t slots() const = 0;
+  /// Starts the job, or queues it to start when a slot is free.
+  virtual void submit(JobTask task) = 0;
+  /// Waits for a submitted job to end and returns it (in any order); nullopt when none is left.
+  virtual std::optional<JobFinished> collect() = 0;
+  /// Jobs submitted and not yet collected.
+  virtual std::size_t pending() const = 0;
+};
+
+/// Reads the result file at `path` into `out`: false when it is missing, not JSON, or not an
+/// object with a status (a job's half-written or foreign file is no result).
+bool read_result_file(const std::string& path, nlohmann::json* out);
+
+/// The `bvhbench run` command line of a task (args[0] = `exe`), writing its result to
+/// task.child_result_path.
+std::vector<std::string> run_command_line(const std::string& exe, const JobTask& task);
+
+}  // namespace bvhbench
