@@ -12,6 +12,7 @@ import argparse
 import io
 import math
 import shutil
+import struct
 import subprocess
 import tempfile
 import zipfile
@@ -149,6 +150,11 @@ def mesh_seeds() -> None:
                                        b"   VERTEX 1 0 0\n   VERTEX 0 1 0\n  ENDLOOP\n ENDFACET\nENDSOLID a\n"
                                        b"solid b\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n"
                                        b"vertex 0 0 1\nendloop\nendfacet\nendsolid b\n")
+    # A binary STL of 100 facets with 300 distinct corners (5 KB): enough vertices to grow the weld
+    # table past its first 512 slots, which the small fixtures never do.
+    facets = b"".join(struct.pack("<12fH", 0, 0, 1, *(float(3 * i + k) * 0.25 + c for k in range(3) for c in (0, 0.5, 1)), 0)
+                      for i in range(100))
+    put("stl", "scattered_binary.stl", b"300 distinct corners".ljust(80, b" ") + struct.pack("<I", 100) + facets)
 
 
 def torus_obj(nu: int, nv: int, big: float = 1.0, small: float = 0.35) -> str:
