@@ -12,6 +12,7 @@ import argparse
 import io
 import math
 import shutil
+import struct
 import subprocess
 import tempfile
 import zipfile
@@ -134,6 +135,28 @@ def compare_seeds() -> None:
     put("compare", "status_row.json", (small / "bunny__random-n10000-s1__distance__embree.json").read_bytes())
 
 
+def mesh_seeds() -> None:
+    # Every mesh fixture, good and bad (the bad ones reach the refusals), to the target of its
+    # format; the fixtures are small (at most a few hundred bytes) and cover each variant.
+    for fmt in ("ply", "obj", "stl", "off"):
+        for f in sorted((FIXTURES / "meshes").glob(f"*.{fmt}")):
+            put(fmt, f.name, f.read_bytes())
+    # What no fixture has: OBJ's relative and slashed indices, `fo`, a continuation, a polygon;
+    # OFF's counts on the keyword line; ASCII STL keywords in upper case with two solids.
+    put("obj", "index_forms.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvn 0 0 1\n"
+                                  b"f 1/1/1 2/1/1 3/1/1\nf -4//1 -3//1 \\\n -1//1\nfo 1/1 3/1 4/1 2/1\n")
+    put("off", "counts_on_keyword_line.off", b"OFF 4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n4 0 1 3 2\n")
+    put("stl", "two_solids_upper.stl", b"SOLID a\n FACET NORMAL 0 0 1\n  OUTER LOOP\n   VERTEX 0 0 0\n"
+                                       b"   VERTEX 1 0 0\n   VERTEX 0 1 0\n  ENDLOOP\n ENDFACET\nENDSOLID a\n"
+                                       b"solid b\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n"
+                                       b"vertex 0 0 1\nendloop\nendfacet\nendsolid b\n")
+    # A binary STL of 100 facets with 300 distinct corners (5 KB): enough vertices to grow the weld
+    # table past its first 512 slots, which the small fixtures never do.
+    facets = b"".join(struct.pack("<12fH", 0, 0, 1, *(float(3 * i + k) * 0.25 + c for k in range(3) for c in (0, 0.5, 1)), 0)
+                      for i in range(100))
+    put("stl", "scattered_binary.stl", b"300 distinct corners".ljust(80, b" ") + struct.pack("<I", 100) + facets)
+
+
 def torus_obj(nu: int, nv: int, big: float = 1.0, small: float = 0.35) -> str:
     lines = []
     for i in range(nu):
@@ -178,6 +201,7 @@ def main() -> None:
         sidecar_seeds(args.bvhbench, tmp)
         suite_seeds()
         compare_seeds()
+        mesh_seeds()
         ebp_seeds(args.bvhbench, tmp)
     for d in sorted(CORPUS.iterdir()):
         files = list(d.iterdir())

@@ -5,7 +5,8 @@
 # line (runs, coverage) and its findings.
 #
 #   fuzz/run_all.sh SECONDS [TARGET...]        e.g. fuzz/run_all.sh 900 npz suite
-#   env: BUILD (build-fuzz), WORK (/tmp/bvhbench-fuzz), FINDINGS (fuzz-findings), PARALLEL (1)
+#   env: BUILD (build-fuzz), WORK (/tmp/bvhbench-fuzz), FINDINGS (fuzz-findings), PARALLEL (1),
+#        MALLOC_LIMIT_MB (512; the largest single allocation an input may make)
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 seconds=${1:?usage: run_all.sh SECONDS [TARGET...]}
@@ -18,9 +19,10 @@ BUILD=${BUILD:-build-fuzz}
 WORK=${WORK:-/tmp/bvhbench-fuzz}
 FINDINGS=${FINDINGS:-fuzz-findings}
 PARALLEL=${PARALLEL:-1}
+MALLOC_LIMIT_MB=${MALLOC_LIMIT_MB:-512}
 dict_of() {
   case $1 in
-    npy) echo npy ;; npz) echo npz ;; suite) echo yaml ;; compare|query_sidecar) echo json ;; *) echo "" ;;
+    npy) echo npy ;; npz) echo npz ;; ply|obj|stl|off) echo "$1" ;; suite) echo yaml ;; compare|query_sidecar) echo json ;; *) echo "" ;;
   esac
 }
 run_one() {
@@ -28,7 +30,7 @@ run_one() {
   mkdir -p "$WORK/$t" "$FINDINGS/$t"
   cp -n "$here/corpus/$t/"* "$WORK/$t/"
   dict=$(dict_of "$t")
-  "$BUILD/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=512 -timeout=10 \
+  "$BUILD/fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb="$MALLOC_LIMIT_MB" -timeout=10 \
     -print_final_stats=1 -artifact_prefix="$FINDINGS/$t/" ${dict:+-dict="$here/dict/$dict.dict"} \
     "$WORK/$t" > "$FINDINGS/$t.log" 2>&1 || true
   echo "$t: $(grep -E '^#[0-9]+' "$FINDINGS/$t.log" | tail -1)"
@@ -36,5 +38,5 @@ run_one() {
   ls "$FINDINGS/$t" | sed "s/^/$t: finding /" || true
 }
 export -f run_one dict_of
-export here seconds BUILD WORK FINDINGS
+export here seconds BUILD WORK FINDINGS MALLOC_LIMIT_MB
 printf '%s\n' "${targets[@]}" | xargs -P "$PARALLEL" -I{} bash -c 'run_one {}'

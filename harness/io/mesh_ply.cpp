@@ -9,6 +9,7 @@
 // element; the triangle passes read the face and strip elements again from their recorded
 // offsets.
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <string_view>
@@ -53,7 +54,25 @@ std::size_t type_size(PlyType t) {
 }
 
 bool is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
+
 bool is_unsigned(PlyType t) { return t == PlyType::u8 || t == PlyType::u16 || t == PlyType::u32 || t == PlyType::u64; }
+
+const char* type_name(PlyType t) {
+  static const char* const kNames[] = {"int8", "uint8", "int16", "uint16", "int32", "uint32",
+                                       "int64", "uint64", "float32", "float64"};
+  return kNames[static_cast<int>(t)];
+}
+
+/// Whether `d`, a number read as double, is a value of integer type `t`: whole and within its
+/// range. The bounds are powers of two, exact in double; a 64-bit type's largest value rounds up
+/// to its bound when read as double (as a binary value of it does), so that bound is allowed.
+bool integer_value_of(PlyType t, double d) {
+  if (d != std::floor(d)) return false;
+  const int bits = int(8 * type_size(t));
+  const double lo = is_unsigned(t) ? 0.0 : -std::ldexp(1.0, bits - 1);
+  const double hi = std::ldexp(1.0, is_unsigned(t) ? bits : bits - 1);
+  return d >= lo && (bits == 64 ? d <= hi : d < hi);
+}
 
 /// The largest value of an unsigned type (for u64, clamped as load_int clamps).
 long long unsigned_max(PlyType t) {
@@ -607,11 +626,17 @@ class PlyParser final : public FormatParser {
           double d;
           if (!parse_double(tok, d)) throw error(where() + quoted_excerpt(tok) + " is not a number");
           // Values take their declared type, so that ASCII and binary files of the same mesh
-          // read the same coordinates.
+          // read the same coordinates: a float32 is rounded to float, and an integer coordinate
+          // must be one of its type (binary cannot hold 1.5 or 300 in a uint8).
           if (prop.type == PlyType::f32) d = double(float(d));
           if (is_vertex)
             for (int c = 0; c < 3; ++c)
-              if (el.coord[c] == int(k)) v[c] = d;
+              if (el.coord[c] == int(k)) {
+                if (is_integer(prop.type) && std::isfinite(d) && !integer_value_of(prop.type, d))
+                  throw error(where() + quoted_excerpt(tok) + " is not a value of type " + type_name(prop.type) +
+                              " (property '" + prop.name + "')");
+                v[c] = d;
+              }
           continue;
         }
         std::string_view tok = next_token(ln);

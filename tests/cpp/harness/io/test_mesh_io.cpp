@@ -192,6 +192,29 @@ TEST(MeshIo, BinaryPlyEveryIntegerTypeAndByteOrder) {
       }
 }
 
+// An integer coordinate in ASCII PLY is a value of its declared type, as in binary: whole and in
+// range (the largest 64-bit values included, which round up when read as double); anything else
+// is refused, naming the value, the type and the property.
+TEST(MeshIo, AsciiPlyIntegerCoordinatesAreValuesOfTheirType) {
+  const auto ply = [](const std::string& x_type, const std::string& x) {
+    return "ply\nformat ascii 1.0\nelement vertex 3\nproperty " + x_type +
+           " x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+           "end_header\n" + x + " 0 0\n0 1 0\n0 0 1\n3 0 1 2\n";
+  };
+  EXPECT_EQ(load_mesh_bytes(ply("uchar", "255"), "m.ply").vertices[0].x, 255.0);
+  EXPECT_EQ(load_mesh_bytes(ply("char", "-128"), "m.ply").vertices[0].x, -128.0);
+  EXPECT_EQ(load_mesh_bytes(ply("int", "-2147483648"), "m.ply").vertices[0].x, -2147483648.0);
+  EXPECT_EQ(load_mesh_bytes(ply("uint64", "18446744073709551615"), "m.ply").vertices[0].x, 18446744073709551616.0);
+  EXPECT_EQ(load_mesh_bytes(ply("int64", "-9223372036854775808"), "m.ply").vertices[0].x, -9223372036854775808.0);
+  EXPECT_EQ(load_mesh_bytes(ply("short", "7.0"), "m.ply").vertices[0].x, 7.0);
+  expect_input_error([&] { load_mesh_bytes(ply("uchar", "256"), "m.ply"); }, "m.ply",
+                     "line 10 (vertex 0): '256' is not a value of type uint8 (property 'x')");
+  expect_input_error([&] { load_mesh_bytes(ply("uint", "-1"), "m.ply"); }, "m.ply", "'-1' is not a value of type uint32");
+  expect_input_error([&] { load_mesh_bytes(ply("int", "1.5"), "m.ply"); }, "m.ply", "'1.5' is not a value of type int32");
+  expect_input_error([&] { load_mesh_bytes(ply("int16", "32768"), "m.ply"); }, "m.ply", "'32768' is not a value of type int16");
+  expect_input_error([&] { load_mesh_bytes(ply("int", "nan"), "m.ply"); }, "m.ply", "has a NaN coordinate");
+}
+
 // ---- triangle strips ----
 
 TEST(MeshIo, TristripsBigEndianWithExtraVertexProperties) {

@@ -14,6 +14,7 @@
 #include "harness/io/npz.hpp"
 #include "harness/io/points_text.hpp"
 #include "harness/io/query_set_io.hpp"
+#include "harness/io/mesh_io.hpp"
 #include "harness/io/zip.hpp"
 #include "harness/run/result_set.hpp"
 #include "harness/run/suite.hpp"
@@ -127,6 +128,52 @@ TEST(NonUtf8Messages, CompareResultFiles) {
                  [&] { load_result_set(path); }, "malformed JSON");
   expect_refused(path, "{\"schema\": \"bvhbench.result/2\\u00e9\", \"status\": \"ok\"}",
                  [&] { load_result_set(path); }, "unknown result schema");
+}
+
+// The mesh readers, each format: a header line (or the keyword line), a keyword and a token of
+// the data with bytes 0x80-0xFF, read from a file whose name has a byte 0xFF, and from memory.
+namespace {
+
+const char* const kPlyAscii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                              "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+struct MeshCase {
+  const char* file;     ///< its extension gives the format
+  std::string bytes;
+  const char* escaped;  ///< what the message quotes
+};
+
+const MeshCase kMeshCases[] = {
+    {"m\xFF.ply", "ply\nformat asc\xFEii 1.0\nend_header\n", "unknown PLY format 'asc\\xFEii'"},
+    {"m\xFF.ply", "ply\nformat ascii 1.0\nelem\x80\xFF vertex 3\nend_header\n",
+     "unexpected header line 'elem\\x80\\xFF vertex 3'"},
+    {"m\xFF.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty flo\xC3t x\nend_header\n",
+     "unknown property type 'flo\\xC3t'"},
+    {"m\xFF.ply", std::string(kPlyAscii) + "0 0 0\n1 0 \xFE" "0\n0 1 0\n3 0 1 2\n", "'\\xFE0' is not a number"},
+    {"m\xFF.ply", std::string(kPlyAscii) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 \xE9\n", "'\\xE9' is not a vertex index"},
+    {"m\xFF.obj", "v 0 0 0\nv 1 0 \xFE\nv 0 1 0\nf 1 2 3\n", "'\\xFE' is not a number"},
+    {"m\xFF.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\xA0\n", "'3\\xA0' is not a vertex reference"},
+    // A statement OBJ does not know is skipped, whatever its bytes; the vertex data is still read.
+    {"m\xFF.obj", "v\xFE 0 0 0\nv 0 0 \x80x\nf 1 2 3\n", "'\\x80x' is not a number"},
+    {"m\xFF.stl", "solid a\nfac\xFE" "et normal 0 0 1\n", "unexpected 'fac\\xFEet'"},
+    {"m\xFF.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 \xFE\n", "'\\xFE' is not a number"},
+    {"m\xFF.stl", "solid a\nfacet normal 0 0 1\nouter \xC3(loop\n", "unexpected '\\xC3(loop'"},
+    {"m\xFF.off", "OF\xFE" "F\n3 1 0\n", "not an OFF file: 'OF\\xFEF'"},
+    {"m\xFF.off", "OFF\n3 1 \xFE\n", "bad counts line '3 1 \\xFE'"},
+    {"m\xFF.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 \x80 0\n3 0 1 2\n", "'\\x80' is not a number"},
+    {"m\xFF.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 \xFF\n", "'\\xFF' is not a vertex index"},
+};
+
+}  // namespace
+
+TEST(NonUtf8Messages, MeshReaders) {
+  TmpDir dir;
+  for (const MeshCase& c : kMeshCases) {
+    const std::string path = dir.file(c.file);
+    SCOPED_TRACE(printable(c.bytes));
+    expect_refused(path, c.bytes, [&] { load_mesh(path); }, c.escaped);
+    expect_printable_refusal([&] { load_mesh_bytes(c.bytes, path, path); }, path, c.escaped);
+  }
 }
 
 TEST(NonUtf8Messages, EbpVerify) {
