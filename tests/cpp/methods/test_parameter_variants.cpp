@@ -84,28 +84,18 @@ TEST_P(ParameterVariants, SphereAgainstBruteForce) {
   for (const char* v : m.variants) expect_matches_brute_force(v, s, true, q);
 }
 
-TEST_P(ParameterVariants, OneTriangleQueryOnVertexAndFarAway) {
+// One triangle (points on a vertex, an edge, the face, far away); a cube queried on a vertex, an
+// edge and a face; duplicate and zero-area triangles; a mesh of zero-area triangles only.
+TEST_P(ParameterVariants, HandMadeCases) {
   const MethodVariants& m = GetParam();
   SKIP_UNLESS_BUILT(m);
-  for (const char* v : m.variants) expect_one_triangle_answers(v);
-}
-
-TEST_P(ParameterVariants, QueryOnAVertexOfAClosedMesh) {
-  const MethodVariants& m = GetParam();
-  SKIP_UNLESS_BUILT(m);
-  for (const char* v : m.variants) expect_cube_surface_answers(v);
-}
-
-TEST_P(ParameterVariants, DuplicateAndZeroAreaTriangles) {
-  const MethodVariants& m = GetParam();
-  SKIP_UNLESS_BUILT(m);
-  for (const char* v : m.variants) expect_degenerate_triangle_answers(v);
-}
-
-TEST_P(ParameterVariants, AllDegenerateMesh) {
-  const MethodVariants& m = GetParam();
-  SKIP_UNLESS_BUILT(m);
-  for (const char* v : m.variants) expect_all_degenerate_answers(v);
+  for (const char* v : m.variants) {
+    SCOPED_TRACE(v);
+    expect_one_triangle_answers(v);
+    expect_cube_surface_answers(v);
+    expect_degenerate_triangle_answers(v);
+    expect_all_degenerate_answers(v);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Float32Methods, ParameterVariants, ::testing::ValuesIn(float32_method_variants()),
