@@ -238,7 +238,8 @@ void expect_surface_conforms(const Variant& v, Precision precision, const Mesh& 
 ///    curvature against the voxel, not on a tolerance the parameters give (at the default voxel,
 ///    86-99% of the near-surface face-interior queries are within 15 degrees, mesh by mesh):
 ///    test_openvdb.cpp asserts that rate for a voxel of 1/128 of the diagonal;
-///  - closest point: on the surface within 1 v for 95% of the queries (two gradient steps);
+///  - closest point: on the surface within 1 v for 95% of the queries (two gradient steps),
+///    checked on every fourth query in the band;
 ///  - closest triangle: the voxel keeps the triangle closest to its centre, so one within 1 v of
 ///    the true distance for 99% of the queries. (How often it is the very triangle depends on
 ///    the triangles' size against the voxel's, not on a tolerance: test_openvdb.cpp asserts a
@@ -259,7 +260,7 @@ void expect_field_conforms(const Variant& v, const Mesh& mesh, bool closed, cons
   const double exterior = info.at("exterior_value").get<double>(), interior = info.at("interior_value").get<double>();
   const double tol = resolved_params(v.spec).get_int("order") == 2 ? 1.5 : 1.0;
   Tally distance, inside, normal;
-  int n = 0, in_band_n = 0, closest_ok = 0, tri_near = 0;
+  int n = 0, in_band_n = 0, closest_checked = 0, closest_ok = 0, tri_near = 0;
   double sum_err = 0;
   for (std::size_t i = 0; i < q.size(); ++i) {
     const Vec3d& p = q[i];
@@ -278,11 +279,14 @@ void expect_field_conforms(const Variant& v, const Mesh& mesh, bool closed, cons
     }
     const double n_len = norm(got.normal);
     normal.check(n_len == 0 || std::abs(n_len - 1) <= 1e-9, "normal of length " + std::to_string(n_len), p);
-    if (banded) {
+    if (banded && i % 4 == 0) {  // a brute-force search of its own: every fourth query will do
+      ++closest_checked;
       double on_surface = 1e300;
       for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
         on_surface = std::min(on_surface, distance_to_triangle(mesh, std::int64_t(t), got.closest));
       if (on_surface <= vox) ++closest_ok;
+    }
+    if (banded) {
       if (got.triangle >= 0 && std::size_t(got.triangle) < mesh.triangles.size() &&
           distance_to_triangle(mesh, got.triangle, p) <= std::abs(ref) + vox)
         ++tri_near;
@@ -294,7 +298,7 @@ void expect_field_conforms(const Variant& v, const Mesh& mesh, bool closed, cons
   if (!closed) return;
   ASSERT_GT(in_band_n, n / 2) << v.spec << ": the band should reach most of the query box";
   EXPECT_LE(sum_err / in_band_n, 0.15) << v.spec;
-  EXPECT_GE(closest_ok, 0.95 * in_band_n) << v.spec << ": " << closest_ok << "/" << in_band_n;
+  EXPECT_GE(closest_ok, 0.95 * closest_checked) << v.spec << ": " << closest_ok << "/" << closest_checked;
   EXPECT_GE(tri_near, 0.99 * in_band_n) << v.spec << ": " << tri_near << "/" << in_band_n;
 }
 

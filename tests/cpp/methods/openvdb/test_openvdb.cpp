@@ -1,4 +1,5 @@
-// openvdb against brute_force on every closed mesh in ../shared/meshes and a procedural sphere,
+// openvdb against brute_force on a closed shared mesh (homer; the others at the default voxel are
+// the method-conformance suite's, tests/cpp/methods/test_conformance.cpp) and a procedural sphere,
 // plus the degenerate cases (one triangle, a point on a vertex, a point far outside, collapsed
 // and duplicate triangles, the voxel cap).
 //
@@ -144,8 +145,10 @@ TEST_P(OpenVdbSharedMesh, AgainstBruteForce) {
   expect_close_to_brute_force(m, GetParam(), coarse(m), 1.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(ClosedMeshes, OpenVdbSharedMesh,
-                         ::testing::Values("cow.obj", "fandisk.obj", "homer.obj", "rocker-arm.obj"),
+// cow, fandisk and rocker-arm at the default voxel are the conformance suite's
+// (tests/cpp/methods/test_conformance.cpp); here homer, at a voxel of 1/128 of the diagonal, with
+// the rates of normals and exact closest triangles that a voxel smaller than the triangles allows.
+INSTANTIATE_TEST_SUITE_P(ClosedMeshes, OpenVdbSharedMesh, ::testing::Values("homer.obj"),
                          [](const auto& info) { return mesh_stem(info.param, ""); });
 
 TEST(OpenVdb, NarrowBandStillAnswersInsideFarFromTheSurface) {
