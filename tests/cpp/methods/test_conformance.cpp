@@ -28,11 +28,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -129,6 +131,7 @@ std::vector<DistanceResult> brute_force_answers(const Mesh& ref_mesh, const std:
   return out;
 }
 
+/// p with all its digits, for failure messages.
 std::string at(const Vec3d& p) {
   std::ostringstream s;
   s.precision(17);
@@ -306,12 +309,9 @@ void expect_field_conforms(const Variant& v, const Mesh& mesh, bool closed, cons
 void expect_conforms(const Variant& v, const Mesh& mesh, bool closed, const std::vector<Vec3d>& q,
                      const std::string& kind) {
   SCOPED_TRACE(v.spec + ", " + kind + " queries");
-  switch (declared_precision(v.method)) {
-    case Precision::exact_double:
-    case Precision::exact_float32:
-    case Precision::float32: return expect_surface_conforms(v, declared_precision(v.method), mesh, closed, q, kind);
-    case Precision::sampled_field: return expect_field_conforms(v, mesh, closed, q, kind);
-  }
+  const Precision precision = declared_precision(v.method);
+  if (precision == Precision::sampled_field) return expect_field_conforms(v, mesh, closed, q, kind);
+  expect_surface_conforms(v, precision, mesh, closed, q, kind);
 }
 
 // ---- the suites ----
@@ -343,7 +343,6 @@ TEST_P(MethodOnSharedMesh, AnswersLikeBruteForce) {
 INSTANTIATE_TEST_SUITE_P(Registered, MethodOnSharedMesh,
                          ::testing::Combine(::testing::ValuesIn(registered_variants()), ::testing::ValuesIn(kMeshes)),
                          VariantMeshName());
-
 
 // supports() is what the registry says the method answers; a query it does not support throws
 // UnsupportedError (the harness records `unsupported`, it never fakes an answer); coherence is
