@@ -131,13 +131,16 @@ std::vector<DistanceResult> brute_force_answers(const Mesh& ref_mesh, const std:
   return out;
 }
 
-/// p with all its digits, for failure messages.
-std::string at(const Vec3d& p) {
+/// x with all its digits, for failure messages (a bit-for-bit check fails by one ulp).
+std::string digits(double x) {
   std::ostringstream s;
   s.precision(17);
-  s << "(" << p.x << ", " << p.y << ", " << p.z << ")";
+  s << x;
   return s.str();
 }
+
+/// p with all its digits.
+std::string at(const Vec3d& p) { return "(" + digits(p.x) + ", " + digits(p.y) + ", " + digits(p.z) + ")"; }
 
 /// Counts the queries where a check fails and keeps the first one's description, so a broken
 /// method gives one readable failure per check instead of thousands.
@@ -191,8 +194,8 @@ void expect_surface_conforms(const Variant& v, Precision precision, const Mesh& 
     const DistanceResult got = dist->distance(p);
     const bool in = ins->inside(p);
     const double want_abs = std::abs(want[i].distance);
-    const std::string answered = std::to_string(got.distance) + " (triangle " + std::to_string(got.triangle) +
-                                 "), brute_force " + std::to_string(want[i].distance) + " (triangle " +
+    const std::string answered = digits(got.distance) + " (triangle " + std::to_string(got.triangle) +
+                                 "), brute_force " + digits(want[i].distance) + " (triangle " +
                                  std::to_string(want[i].triangle) + ")";
     if (bit_for_bit) {
       distance.check(std::abs(got.distance) == want_abs, "|distance| " + answered, p);
@@ -276,7 +279,7 @@ void expect_field_conforms(const Variant& v, const Mesh& mesh, bool closed, cons
       const double err = (closed ? std::abs(got.distance - ref) : std::abs(std::abs(got.distance) - std::abs(ref))) / vox;
       ++in_band_n;
       sum_err += err;
-      distance.check(err <= tol, "distance " + std::to_string(got.distance) + " vs " + std::to_string(ref), p);
+      distance.check(err <= tol, "distance " + digits(got.distance) + " vs " + digits(ref), p);
     } else if (closed && std::abs(ref) > (ref >= 0 ? ex_band : in_band) + vox) {
       distance.check(got.distance == (ref >= 0 ? exterior : interior), "beyond the band, not the clamp", p);
     }
