@@ -132,8 +132,8 @@ import runpy, sys
 sys.argv = ["stability_matrix.py", "--help"]
 try:
     runpy.run_path({str(TOOL)!r}, run_name="__main__")
-except SystemExit:
-    pass
+except SystemExit as e:
+    assert e.code in (0, None), f"--help exited {{e.code}}"
 bad = [m for m in ("matplotlib", "numpy") if m in sys.modules]
 assert not bad, bad
 """
