@@ -11,6 +11,7 @@
 
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/util/errors.hpp"
 
 namespace bvhbench {
 namespace {
@@ -20,6 +21,9 @@ class BruteForce final : public Method {
   explicit BruteForce(const Params& p) : threshold_(p.get_real("winding_threshold")) {}
 
   void build(const Mesh& mesh, const BuildContext&) override {
+    // No triangle, no closest point: an answer would be made up (the mesh readers refuse such a
+    // file first; this is for callers of the interface, as the other methods do).
+    if (mesh.triangles.empty()) throw InputError("brute_force: the mesh has no triangle");
     v_ = mesh.vertices;
     f_ = mesh.triangles;
   }
@@ -51,7 +55,6 @@ class BruteForce final : public Method {
     }
     triangles_tested_ += f_.size();
     DistanceResult r;
-    if (f_.empty()) return r;
     const auto& t = f_[best_i];
     r.closest = best_q;
     r.triangle = std::int64_t(best_i);

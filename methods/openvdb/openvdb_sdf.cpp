@@ -108,6 +108,9 @@ class OpenVdbSdf final : public Method {
         threads_(int(p.get_int("threads"))) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
+    // Without a triangle there is no surface to sample, whatever the query (the voxel size of
+    // an empty box would otherwise make a misleading "too many voxels" refusal).
+    if (mesh.triangles.empty()) throw InputError("openvdb: the mesh has no triangle");
     try {
       build_impl(mesh, ctx);
     } catch (const openvdb::Exception& e) {

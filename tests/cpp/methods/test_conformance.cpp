@@ -157,11 +157,7 @@ struct Tally {
   EXPECT_EQ((tally).failed, 0) << (name) << ": " << (tally).failed << " queries, first: " << (tally).first
 
 /// The resolved parameters of `spec` (defaults filled in).
-Params resolved_params(const std::string& spec) {
-  Params p;
-  (void)Registry::global().create(spec, nullptr, &p);
-  return p;
-}
+Params resolved_params(const std::string& spec) { return Registry::global().resolve(spec).params; }
 
 // ---- the checks of each precision against brute_force ----
 
@@ -440,7 +436,8 @@ TEST_P(MethodConformance, EmptyMeshIsRefusedCleanly) {
       ADD_FAILURE() << "refused with an exception that is not an InputError: " << e.what();
       continue;
     }
-    // Accepted (brute_force does): nothing is inside, and no triangle is the closest.
+    // Accepted (a method may document answers for it): nothing is inside, and no triangle is
+    // the closest.
     if (m->supports(QueryType::inside)) {
       EXPECT_FALSE(m->inside(q[0]));
     }
