@@ -20,8 +20,8 @@
 #include <filesystem>
 #include <vector>
 
-#include "ebp_store.hpp"
-#include "ebp_verify.hpp"
+#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
 #include "fuzz_contract.hpp"
 
 using namespace bvhbench;

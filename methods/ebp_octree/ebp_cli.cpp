@@ -21,11 +21,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "ebp_adapter.hpp"
-#include "ebp_extbuild.hpp"
-#include "ebp_ooc.hpp"
-#include "ebp_store.hpp"
-#include "ebp_verify.hpp"
+#include "methods/ebp_octree/ebp_adapter.hpp"
+#include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
 #include "harness/cli/commands.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"

@@ -12,8 +12,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "ebp_adapter.hpp"
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/ebp_adapter.hpp"
+#include "methods/ebp_octree/core/query.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
 #include "harness/io/mesh_io.hpp"

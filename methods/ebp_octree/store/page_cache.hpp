@@ -9,8 +9,8 @@
 #include <optional>
 #include <vector>
 
-#include "ebp_octree.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 
 namespace ebp {
 

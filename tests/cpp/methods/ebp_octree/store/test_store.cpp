@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "ebp_ooc.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
 #include "harness/io/mesh_io.hpp"

@@ -15,9 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ebp_extbuild.hpp"
-#include "ebp_store.hpp"
-#include "ebp_verify.hpp"
+#include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
 #include "harness/core/mesh.hpp"
 #include "support/test_support.hpp"
 

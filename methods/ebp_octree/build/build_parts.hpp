@@ -10,7 +10,7 @@
 #include <functional>
 #include <vector>
 
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
 
 namespace ebp::detail {
 

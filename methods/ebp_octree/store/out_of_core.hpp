@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "ebp_cache.hpp"
-#include "ebp_octree.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/store/page_cache.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 
 namespace ebp {
 

@@ -1,4 +1,4 @@
-#include "polytope.hpp"
+#include "methods/ebp_octree/build/polytope.hpp"
 
 #include <algorithm>
 #include <cmath>

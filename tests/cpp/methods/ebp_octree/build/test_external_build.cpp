@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "ebp_extbuild.hpp"
-#include "ebp_ooc.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/io/mesh_io.hpp"
 #include "harness/util/errors.hpp"

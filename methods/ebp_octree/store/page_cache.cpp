@@ -1,5 +1,5 @@
 // The page cache: an LRU list threaded through per-page arrays, O(1) per hit.
-#include "ebp_cache.hpp"
+#include "methods/ebp_octree/store/page_cache.hpp"
 
 namespace ebp {
 

@@ -6,7 +6,7 @@
 // page query's own branch and bound (Query::distance_bound), started with the global best. The result is
 // the lexicographic minimum of (squared distance, input triangle index) over all triangles, as
 // the in-memory answer is whatever its visiting order: the same answer, bit for bit.
-#include "ebp_ooc.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -13,9 +13,10 @@
 
 #include <stdexcept>
 
-#include "ebp_octree.hpp"
-#include "leaf_blocks.hpp"
-#include "predicates.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+#include "methods/ebp_octree/core/reference_points.hpp"
 
 namespace ebp {
 

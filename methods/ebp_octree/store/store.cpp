@@ -2,9 +2,9 @@
 // tree, directory, pages decoded on demand into ordinary Octrees). Every number read from the
 // file is checked before it is used as a size, an offset or an index. See ebp_store.hpp and
 // OUT_OF_CORE.md.
-#include "ebp_store.hpp"
-#include "ebp_io.hpp"
-#include "leaf_blocks.hpp"
+#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/posix_io.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

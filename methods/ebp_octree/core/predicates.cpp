@@ -1,6 +1,6 @@
 // Exact fallbacks of the predicates (CGAL's Epick: static filter, interval filter, then exact
 // arithmetic). Kept in one translation unit so that only it pays for the CGAL headers.
-#include "predicates.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 

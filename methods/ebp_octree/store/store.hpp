@@ -27,7 +27,7 @@
 #include <string>
 #include <vector>
 
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
 
 namespace ebp {
 

@@ -2,7 +2,7 @@
 // kBlockTris triangles, nodes). Every box contains exactly what it claims (the float vertices are
 // exact doubles; min/max are exact; cell bounds are rounded outward to float), so any distance to
 // a box, with the query's rounding tolerance, is a lower bound and pruning by it is exact.
-#include "leaf_blocks.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // ("`bvhbench ebp build`"): streamed mesh, sorted runs spilled and merged, leaves and inner nodes
 // built in octcode order by the in-memory builder's code, pages written as subtrees complete,
 // colouring over the node skeleton patched into the pages at the end.
-#include "ebp_extbuild.hpp"
+#include "methods/ebp_octree/build/external_build.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -27,11 +27,11 @@
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
-#include "ebp_build_parts.hpp"
-#include "ebp_io.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/build/build_parts.hpp"
+#include "methods/ebp_octree/store/posix_io.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 #include "harness/io/mesh_reader.hpp"
-#include "predicates.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
 
 namespace ebp {
 

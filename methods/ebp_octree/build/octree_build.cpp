@@ -26,110 +26,21 @@
 #include <tbb/task_arena.h>
 #include <tbb/enumerable_thread_specific.h>
 
-#include "ebp_build_parts.hpp"
-#include "ebp_octree.hpp"
-#include "leaf_blocks.hpp"
-#include "polytope.hpp"
-#include "predicates.hpp"
-#include "tri_box.hpp"
+#include "methods/ebp_octree/build/build_parts.hpp"
+#include "methods/ebp_octree/build/polytope.hpp"
+#include "methods/ebp_octree/build/tri_box.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+#include "methods/ebp_octree/core/reference_points.hpp"
 
 namespace ebp {
-
-const char* to_string(NodeKind k) {
-  switch (k) {
-    case NodeKind::white: return "white";
-    case NodeKind::black: return "black";
-    case NodeKind::inner: return "inner";
-    case NodeKind::leaf: return "leaf";
-  }
-  return "?";
-}
-const char* to_string(LeafConfig c) {
-  switch (c) {
-    case LeafConfig::convex: return "convex";
-    case LeafConfig::concave: return "concave";
-    case LeafConfig::special: return "special";
-  }
-  return "?";
-}
-
-std::size_t Octree::bytes() const {
-  return sizeof(*this) + nodes.capacity() * sizeof(Node) + children.capacity() * sizeof(std::uint32_t) +
-         planes.capacity() * sizeof(Plane) + leaves.capacity() * sizeof(Leaf) +
-         tris.capacity() * sizeof(LeafTri);
-}
-
-void Octree::cell_box(Octcode c, Vec3d* lo, Vec3d* hi) const {
-  std::uint32_t x, y, z;
-  octcode_cell(c, &x, &y, &z);
-  const double s = cell_size(octcode_level(c));
-  *lo = {root_lo.x + double(x) * s, root_lo.y + double(y) * s, root_lo.z + double(z) * s};
-  *hi = {root_lo.x + double(x + 1) * s, root_lo.y + double(y + 1) * s, root_lo.z + double(z + 1) * s};
-}
-
-std::uint32_t Octree::locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
-  std::uint32_t i = 0;
-  while (nodes[i].kind == NodeKind::inner) {
-    const int shift = leaf_level - octcode_level(nodes[i].code) - 1;
-    const int o = int((x >> shift) & 1u) | int(((y >> shift) & 1u) << 1) | int(((z >> shift) & 1u) << 2);
-    i = children[nodes[i].index + std::uint32_t(o)];
-  }
-  return i;
-}
-
-static Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
-
-bool segment_winding(const Vec3d& p, const Vec3d& q, const LeafTri* const* list, std::size_t n, int* delta) {
-  int w = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const LeafTri& t = *list[i];
-    if (t.flags & kDegenerate) continue;
-    const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
-    const int sp = orient3d(a, b, c, p), sq = orient3d(a, b, c, q);
-    if (sp == 0 && sq == 0) {
-      // The segment lies in the triangle's plane: degenerate if it may meet the triangle
-      // (conservatively: if the bounding boxes overlap).
-      Box3d sb, tb;
-      sb.add(p); sb.add(q); tb.add(a); tb.add(b); tb.add(c);
-      if (sb.lo.x <= tb.hi.x && tb.lo.x <= sb.hi.x && sb.lo.y <= tb.hi.y && tb.lo.y <= sb.hi.y &&
-          sb.lo.z <= tb.hi.z && tb.lo.z <= sb.hi.z)
-        return false;
-      continue;
-    }
-    const Cross r = sq != 0 ? segment_triangle(p, q, sp, sq, a, b, c) : segment_triangle(q, p, sq, sp, a, b, c);
-    if (r == Cross::degenerate || r == Cross::on_p) return false;
-    if (r == Cross::proper) w += sp > 0 ? 1 : -1;
-  }
-  *delta = w;
-  return true;
-}
-
-bool segment_winding(const Vec3d& p, const Vec3d& q, const LeafTri* list, std::size_t n, int* delta) {
-  std::vector<const LeafTri*> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = list + i;
-  return segment_winding(p, q, v.data(), n, delta);
-}
-
-/// Fixed offsets (fractions of the half cell) of the candidate reference points. The first is
-/// near the centre; the rest are a Halton (2, 3, 5) sequence in (-0.45, 0.45)^3.
-const std::vector<Vec3d>& ref_offsets() {
-  static const std::vector<Vec3d> offs = [] {
-    std::vector<Vec3d> v{{0.0137, 0.0291, 0.0073}};
-    auto halton = [](int i, int b) {
-      double f = 1, r = 0;
-      while (i > 0) { f /= b; r += f * (i % b); i /= b; }
-      return r;
-    };
-    for (int i = 1; i < 24; ++i)
-      v.push_back({0.9 * (halton(i, 2) - 0.5), 0.9 * (halton(i, 3) - 0.5), 0.9 * (halton(i, 5) - 0.5)});
-    return v;
-  }();
-  return offs;
-}
 
 using detail::BuildContext;
 
 namespace {
+
+Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }

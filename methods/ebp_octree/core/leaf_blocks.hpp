@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
 
 namespace ebp {
 

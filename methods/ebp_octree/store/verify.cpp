@@ -1,8 +1,8 @@
 // The whole-store check (ebp_verify.hpp): the reader's open, then every page through the reader's
 // own load_page, in batches decoded in parallel and judged in page order, then the counts.
-#include "ebp_verify.hpp"
-#include "ebp_io.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
+#include "methods/ebp_octree/store/posix_io.hpp"
+#include "methods/ebp_octree/store/store.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
