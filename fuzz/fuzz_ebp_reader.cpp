@@ -12,7 +12,8 @@
 
 #include "methods/ebp_octree/store/page_cache.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 #include "fuzz_contract.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -20,7 +20,9 @@
 #include <filesystem>
 #include <vector>
 
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 #include "methods/ebp_octree/store/verify.hpp"
 #include "fuzz_contract.hpp"
 

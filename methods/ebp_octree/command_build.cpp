@@ -21,7 +21,9 @@
 #include "methods/ebp_octree/build/external_build.hpp"
 #include "methods/ebp_octree/commands.hpp"
 #include "methods/ebp_octree/ebp_method.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
 
 namespace bvhbench {
 namespace {

@@ -8,7 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "methods/ebp_octree/commands.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 
 namespace bvhbench {
 

@@ -29,7 +29,9 @@
 
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/page_codec.hpp"
 #include "harness/io/mesh_reader.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
@@ -534,66 +536,35 @@ class Assembler {
     P.group_bytes = 0;
   }
 
-  /// serialise_page() of the in-memory writer, from fragments.
+  /// One page from fragments, encoded by the page codec that the in-memory writer uses too.
   void write_page(Octcode parent, std::vector<Frag>& g, const std::vector<std::uint32_t>& octants,
                   const std::vector<std::uint32_t>& tops) {
     const auto id = std::uint32_t(dir.size());
     if (opt_.before_page) opt_.before_page(id);
     if (opt_.check) opt_.check();
     Frag all;
-    std::vector<PageRoot> roots;
+    PageArrays a;
     for (std::size_t i = 0; i < g.size(); ++i) {
-      roots.push_back({octants[i], std::uint32_t(all.nodes.size())});
+      a.roots.push_back({octants[i], std::uint32_t(all.nodes.size())});
       all.append(g[i]);
     }
-    std::vector<std::uint32_t> local;
-    local.reserve(all.tris.size());
-    for (const LeafTri& lt : all.tris) local.push_back(lt.tri);
-    std::sort(local.begin(), local.end());
-    local.erase(std::unique(local.begin(), local.end()), local.end());
-    for (LeafTri& lt : all.tris)
-      lt.tri = std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri) - local.begin());
-    PageHeader ph{};
-    ph.magic = kPageMagic;
-    ph.page_id = id;
-    ph.parent = parent;
-    ph.nroots = std::uint32_t(roots.size());
-    ph.nnodes = std::uint32_t(all.nodes.size());
-    ph.nchildren = std::uint32_t(all.children.size());
-    ph.nplanes = std::uint32_t(all.planes.size());
-    ph.nleaves = std::uint32_t(all.leaves.size());
-    ph.ntris = std::uint32_t(all.tris.size());
-    ph.nlocal = std::uint32_t(local.size());
-    std::vector<std::uint8_t> out;
-    auto put = [&](const void* p, std::size_t n) {
-      const auto* b = static_cast<const std::uint8_t*>(p);
-      out.insert(out.end(), b, b + n);
-    };
-    put(&ph, sizeof ph);
-    put(roots.data(), roots.size() * sizeof(PageRoot));
-    const std::size_t nodes_at = out.size();
-    put(all.nodes.data(), all.nodes.size() * sizeof(Node));
-    put(all.children.data(), all.children.size() * sizeof(std::uint32_t));
-    put(all.planes.data(), all.planes.size() * sizeof(Plane));
-    const std::size_t leaves_at = out.size();
-    put(all.leaves.data(), all.leaves.size() * sizeof(Leaf));
-    put(all.tris.data(), all.tris.size() * sizeof(LeafTri));
-    put(local.data(), local.size() * sizeof(std::uint32_t));
-    if (out.size() > kMaxPageBytes) throw std::runtime_error("ebp store: a page exceeds 1 GiB (one leaf too large)");
+    a.nodes = std::move(all.nodes);
+    a.children = std::move(all.children);
+    a.planes = std::move(all.planes);
+    a.leaves = std::move(all.leaves);
+    a.tris = std::move(all.tris);
     PageEntry e{};
+    const EncodedPage page = encode_page(a, id, parent, &e);
+    const std::vector<std::uint8_t>& out = page.bytes;
+    const std::size_t nodes_at = page.nodes_offset, leaves_at = page.leaves_offset;
     e.offset = off_;
-    e.size = std::uint32_t(out.size());
-    e.crc = crc32c(out.data(), out.size());
-    e.parent = parent;
-    e.triangles = ph.ntris;
-    e.nodes = ph.nnodes;
     pwrite_all(fd_, path_, out.data(), out.size(), off_);
     off_ = (off_ + out.size() + kPageAlign - 1) / kPageAlign * kPageAlign;
     dir.push_back(e);
     for (std::uint32_t k : tops) top[k].index = id;
     // Where the colouring will go.
-    for (std::size_t i = 0; i < all.nodes.size(); ++i) {
-      const Node& nd = all.nodes[i];
+    for (std::size_t i = 0; i < a.nodes.size(); ++i) {
+      const Node& nd = a.nodes[i];
       if (nd.kind == NodeKind::white) {
         Patch p{};
         p.page = id;

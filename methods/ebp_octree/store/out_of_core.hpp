@@ -10,7 +10,8 @@
 
 #include "methods/ebp_octree/store/page_cache.hpp"
 #include "methods/ebp_octree/core/query.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 
 namespace ebp {
 

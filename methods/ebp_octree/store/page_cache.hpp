@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "methods/ebp_octree/core/query.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 
 namespace ebp {
 

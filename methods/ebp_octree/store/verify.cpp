@@ -2,7 +2,9 @@
 // own load_page, in batches decoded in parallel and judged in page order, then the counts.
 #include "methods/ebp_octree/store/verify.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

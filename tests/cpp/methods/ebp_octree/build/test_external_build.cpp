@@ -19,7 +19,9 @@
 
 #include "methods/ebp_octree/build/external_build.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/io/mesh_io.hpp"
 #include "harness/util/errors.hpp"

@@ -17,7 +17,10 @@
 #include <vector>
 
 #include "methods/ebp_octree/store/out_of_core.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
 #include "harness/io/mesh_io.hpp"

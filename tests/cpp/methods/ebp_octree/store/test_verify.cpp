@@ -16,7 +16,10 @@
 #include <nlohmann/json.hpp>
 
 #include "methods/ebp_octree/build/external_build.hpp"
-#include "methods/ebp_octree/store/store.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
 #include "methods/ebp_octree/store/verify.hpp"
 #include "harness/core/mesh.hpp"
 #include "support/test_support.hpp"

@@ -1,10 +1,7 @@
-// The `.ebp` store: writer (from an in-memory Octree, page by page), reader (header, pinned top
-// tree, directory, pages decoded on demand into ordinary Octrees). Every number read from the
-// file is checked before it is used as a size, an offset or an index. See ebp_store.hpp and
-// OUT_OF_CORE.md.
-#include "methods/ebp_octree/store/store.hpp"
-#include "methods/ebp_octree/store/posix_io.hpp"
-#include "methods/ebp_octree/core/leaf_blocks.hpp"
+// The `.ebp` reader (reader.hpp): header, top tree and directory checked and pinned at open;
+// pages read and decoded into ordinary Octrees on demand. Every number read from the file is
+// checked before it is used as a size, an offset or an index. See OUT_OF_CORE.md.
+#include "methods/ebp_octree/store/reader.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -14,365 +11,16 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <limits>
+#include <functional>
 #include <map>
-#include <stdexcept>
-
-#if defined(__x86_64__)
-#include <nmmintrin.h>
-#endif
 
 #include "harness/util/errors.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/posix_io.hpp"
 
 namespace ebp {
 
-// ---------------------------------------------------------------------------------------------
-// CRC-32C
-namespace {
-
-struct CrcTable {
-  std::uint32_t t[256];
-  CrcTable() {
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? (c >> 1) ^ 0x82F63B78u : c >> 1;
-      t[i] = c;
-    }
-  }
-};
-
-std::uint32_t crc_sw(const std::uint8_t* p, std::size_t n, std::uint32_t c) {
-  static const CrcTable tab;
-  while (n--) c = tab.t[(c ^ *p++) & 0xffu] ^ (c >> 8);
-  return c;
-}
-
-#if defined(__x86_64__)
-__attribute__((target("sse4.2"))) std::uint32_t crc_hw(const std::uint8_t* p, std::size_t n, std::uint32_t c32) {
-  std::uint64_t c = c32;
-  while (n >= 8) {
-    std::uint64_t v;
-    std::memcpy(&v, p, 8);
-    c = _mm_crc32_u64(c, v);
-    p += 8;
-    n -= 8;
-  }
-  c32 = std::uint32_t(c);
-  while (n--) c32 = _mm_crc32_u8(c32, *p++);
-  return c32;
-}
-#endif
-
-}  // namespace
-
-std::uint32_t crc32c(const void* data, std::size_t n, std::uint32_t crc) {
-  const auto* p = static_cast<const std::uint8_t*>(data);
-  std::uint32_t c = ~crc;
-#if defined(__x86_64__)
-  static const bool hw = __builtin_cpu_supports("sse4.2");
-  c = hw ? crc_hw(p, n, c) : crc_sw(p, n, c);
-#else
-  c = crc_sw(p, n, c);
-#endif
-  return ~c;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Writer
-namespace {
-
-// Octree::closed is being added to the in-memory structure; read and set it only if it exists.
-template <class T>
-auto tree_closed(const T& t, int) -> decltype(bool(t.closed)) { return t.closed; }
-template <class T>
-bool tree_closed(const T&, long) { return false; }
-template <class T>
-auto set_tree_closed(T& t, bool v, int) -> decltype(void(t.closed = v)) { t.closed = v; }
-template <class T>
-void set_tree_closed(T&, bool, long) {}
-
-std::uint64_t align_up(std::uint64_t v, std::uint64_t a) { return (v + a - 1) / a * a; }
-
-struct Fd {
-  int fd = -1;
-  std::string path;
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
-/// The cut of the tree into a pinned top and pages (subtrees packed by parent).
-struct PageSpec {
-  Octcode parent;
-  std::vector<PageRoot> roots;  // octant, node index in the original tree
-};
-
-struct Plan {
-  std::vector<TopNode> top;
-  std::vector<std::uint32_t> top_children;
-  std::vector<Plane> top_planes;
-  std::vector<PageSpec> pages;
-};
-
-std::uint64_t node_own_bytes(const Octree& t, const Node& nd) {
-  std::uint64_t b = sizeof(Node) + sizeof(Plane) * nd.plane_count;
-  if (nd.kind == NodeKind::inner) b += 8 * sizeof(std::uint32_t);
-  if (nd.kind == NodeKind::leaf)
-    b += sizeof(Leaf) + std::uint64_t(t.leaves[nd.index].tri_count) * (sizeof(LeafTri) + sizeof(std::uint32_t));
-  return b;
-}
-
-std::uint64_t subtree_bytes(const Octree& t, std::uint32_t i, std::vector<std::uint64_t>& memo) {
-  const Node& nd = t.nodes[i];
-  std::uint64_t b = node_own_bytes(t, nd);
-  if (nd.kind == NodeKind::inner)
-    for (int o = 0; o < 8; ++o) b += subtree_bytes(t, t.children[nd.index + std::uint32_t(o)], memo);
-  memo[i] = b;
-  return b;
-}
-
-std::uint32_t push_top(Plan& P, const Octree& t, std::uint32_t i, TopKind kind, std::uint32_t index) {
-  const Node& nd = t.nodes[i];
-  TopNode tn{};
-  tn.code = nd.code;
-  tn.plane_begin = std::uint32_t(P.top_planes.size());
-  tn.plane_count = (kind == TopKind::inner || kind == TopKind::page) ? nd.plane_count : 0;
-  for (std::uint32_t k = 0; k < tn.plane_count; ++k) P.top_planes.push_back(t.planes[nd.plane_begin + k]);
-  tn.kind = kind;
-  tn.index = index;
-  P.top.push_back(tn);
-  return std::uint32_t(P.top.size() - 1);
-}
-
-std::uint32_t make_top(Plan& P, const Octree& t, std::uint32_t i, const std::vector<std::uint64_t>& memo,
-                       std::uint64_t target) {
-  const Node& nd = t.nodes[i];
-  const std::uint32_t cb = std::uint32_t(P.top_children.size());
-  const std::uint32_t me = push_top(P, t, i, TopKind::inner, cb);
-  P.top_children.resize(cb + 8);
-  PageSpec group{nd.code, {}};
-  std::vector<std::uint32_t> group_top;
-  std::uint64_t group_bytes = 0;
-  auto flush = [&] {
-    if (group.roots.empty()) return;
-    const auto id = std::uint32_t(P.pages.size());
-    for (std::uint32_t k : group_top) P.top[k].index = id;
-    P.pages.push_back(group);
-    group.roots.clear();
-    group_top.clear();
-    group_bytes = 0;
-  };
-  for (std::uint32_t o = 0; o < 8; ++o) {
-    const std::uint32_t c = t.children[nd.index + o];
-    const Node& cn = t.nodes[c];
-    if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) {
-      P.top_children[cb + o] = push_top(P, t, c, cn.kind == NodeKind::white ? TopKind::white : TopKind::black, 0);
-    } else if (cn.kind == NodeKind::inner && memo[c] > target) {
-      flush();  // keep the pages in octcode order
-      P.top_children[cb + o] = make_top(P, t, c, memo, target);
-    } else {
-      if (!group.roots.empty() && group_bytes + memo[c] > target) flush();
-      group.roots.push_back({o, c});
-      group_bytes += memo[c];
-      const std::uint32_t k = push_top(P, t, c, TopKind::page, 0);
-      group_top.push_back(k);
-      P.top_children[cb + o] = k;
-    }
-  }
-  flush();
-  return me;
-}
-
-Plan plan_pages(const Octree& t, std::uint64_t target) {
-  Plan P;
-  std::vector<std::uint64_t> memo(t.nodes.size(), 0);
-  const std::uint64_t total = subtree_bytes(t, 0, memo);
-  if (t.nodes[0].kind != NodeKind::inner || total <= target) {
-    push_top(P, t, 0, TopKind::page, 0);
-    P.pages.push_back({kNoParent, {{0, 0}}});
-  } else {
-    make_top(P, t, 0, memo, target);
-  }
-  return P;
-}
-
-/// Serialises one page of the plan.
-std::vector<std::uint8_t> serialise_page(const Octree& t, const PageSpec& spec, std::uint32_t id, PageEntry* e) {
-  std::vector<Node> nodes;
-  std::vector<std::uint32_t> children;
-  std::vector<Plane> planes;
-  std::vector<Leaf> leaves;
-  std::vector<LeafTri> tris;
-  std::vector<PageRoot> roots;
-  // Pre-order copy of a subtree with page-local indices.
-  std::function<std::uint32_t(std::uint32_t)> emit = [&](std::uint32_t i) -> std::uint32_t {
-    const Node& src = t.nodes[i];
-    const auto li = std::uint32_t(nodes.size());
-    nodes.push_back(src);
-    nodes[li].plane_begin = std::uint32_t(planes.size());
-    planes.insert(planes.end(), t.planes.begin() + src.plane_begin, t.planes.begin() + src.plane_begin + src.plane_count);
-    if (src.kind == NodeKind::leaf) {
-      Leaf lf = t.leaves[src.index];
-      const auto tb = std::uint32_t(tris.size());
-      tris.insert(tris.end(), t.tris.begin() + lf.tri_begin, t.tris.begin() + lf.tri_begin + lf.tri_count);
-      lf.tri_begin = tb;
-      nodes[li].index = std::uint32_t(leaves.size());
-      leaves.push_back(lf);
-    } else if (src.kind == NodeKind::inner) {
-      const auto cb = std::uint32_t(children.size());
-      children.resize(cb + 8);
-      nodes[li].index = cb;
-      for (std::uint32_t o = 0; o < 8; ++o) {
-        const std::uint32_t c = emit(t.children[src.index + o]);
-        children[cb + o] = c;
-      }
-    } else {
-      nodes[li].index = 0;
-    }
-    nodes[li].next = std::uint32_t(nodes.size());
-    return li;
-  };
-  for (const PageRoot& r : spec.roots) roots.push_back({r.octant, emit(r.node)});
-  std::vector<std::uint32_t> local;
-  local.reserve(tris.size());
-  for (const LeafTri& lt : tris) local.push_back(lt.tri);
-  std::sort(local.begin(), local.end());
-  local.erase(std::unique(local.begin(), local.end()), local.end());
-  for (LeafTri& lt : tris)
-    lt.tri = std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri) - local.begin());
-
-  PageHeader ph{};
-  ph.magic = kPageMagic;
-  ph.page_id = id;
-  ph.parent = spec.parent;
-  ph.nroots = std::uint32_t(roots.size());
-  ph.nnodes = std::uint32_t(nodes.size());
-  ph.nchildren = std::uint32_t(children.size());
-  ph.nplanes = std::uint32_t(planes.size());
-  ph.nleaves = std::uint32_t(leaves.size());
-  ph.ntris = std::uint32_t(tris.size());
-  ph.nlocal = std::uint32_t(local.size());
-  std::vector<std::uint8_t> out;
-  auto put = [&](const void* p, std::size_t n) {
-    const auto* b = static_cast<const std::uint8_t*>(p);
-    out.insert(out.end(), b, b + n);
-  };
-  put(&ph, sizeof ph);
-  put(roots.data(), roots.size() * sizeof(PageRoot));
-  put(nodes.data(), nodes.size() * sizeof(Node));
-  put(children.data(), children.size() * sizeof(std::uint32_t));
-  put(planes.data(), planes.size() * sizeof(Plane));
-  put(leaves.data(), leaves.size() * sizeof(Leaf));
-  put(tris.data(), tris.size() * sizeof(LeafTri));
-  put(local.data(), local.size() * sizeof(std::uint32_t));
-  if (out.size() > kMaxPageBytes) throw std::runtime_error("ebp store: a page exceeds 1 GiB (one leaf too large)");
-  e->size = std::uint32_t(out.size());
-  e->crc = crc32c(out.data(), out.size());
-  e->parent = spec.parent;
-  e->triangles = ph.ntris;
-  e->nodes = ph.nnodes;
-  return out;
-}
-
-}  // namespace
-
-void write_store(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
-  if (t.nodes.empty()) throw std::invalid_argument("ebp store: empty tree");
-  const Plan P = plan_pages(t, std::max<std::size_t>(opt.page_target, 4096));
-  Fd f;
-  f.path = path;
-  f.fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  if (f.fd < 0) io::fail(path, "cannot create");
-
-  FileHeader h{};
-  std::memcpy(h.magic, kStoreMagic, 8);
-  h.version = kStoreVersion;
-  h.header_size = sizeof(FileHeader);
-  for (int k = 0; k < 3; ++k) h.root_lo[k] = t.root_lo[k];
-  h.root_size = t.root_size;
-  h.leaf_level = std::uint32_t(t.leaf_level);
-  h.num_triangles = t.num_triangles;
-  h.leaf_factor = opt.params.leaf_factor;
-  h.cluster_angle = opt.params.cluster_angle;
-  h.max_planes = opt.params.max_planes;
-  h.page_target = std::uint32_t(std::max<std::size_t>(opt.page_target, 4096));
-  h.flags = tree_closed(t, 0) ? kStoreClosed : 0;
-  h.nodes = t.nodes.size();
-  h.leaves = t.leaves.size();
-  for (const Node& nd : t.nodes) {
-    if (nd.kind == NodeKind::inner) ++h.inner;
-    if (nd.kind == NodeKind::white) ++h.white;
-    if (nd.kind == NodeKind::black) ++h.black;
-  }
-  h.triangle_refs = t.tris.size();
-  h.planes = t.planes.size();
-  h.num_pages = P.pages.size();
-  h.num_top_nodes = P.top.size();
-  h.num_top_children = P.top_children.size();
-  h.num_top_planes = P.top_planes.size();
-
-  std::uint64_t off = sizeof(FileHeader);
-  auto section = [&](const void* data, std::size_t n, Section* s) {
-    s->offset = off;
-    s->size = n;
-    s->crc = crc32c(data, n);
-    if (n) io::pwrite_all(f.fd, f.path, data, n, off);
-    off = align_up(off + n, 8);
-  };
-  section(P.top.data(), P.top.size() * sizeof(TopNode), &h.top_nodes);
-  section(P.top_children.data(), P.top_children.size() * sizeof(std::uint32_t), &h.top_children);
-  section(P.top_planes.data(), P.top_planes.size() * sizeof(Plane), &h.top_planes);
-  section(opt.info_json.data(), opt.info_json.size(), &h.info);
-
-  std::vector<PageEntry> dir(P.pages.size());
-  off = align_up(off, kPageAlign);
-  h.pages.offset = off;
-  for (std::uint32_t id = 0; id < P.pages.size(); ++id) {
-    if (opt.before_page) opt.before_page(id);
-    PageEntry& e = dir[id];
-    const std::vector<std::uint8_t> blob = serialise_page(t, P.pages[id], id, &e);
-    e.offset = off;
-    io::pwrite_all(f.fd, f.path, blob.data(), blob.size(), off);
-    off = align_up(off + blob.size(), kPageAlign);
-    if (opt.progress) opt.progress(double(id + 1) / double(P.pages.size()));
-  }
-  h.pages.size = off - h.pages.offset;
-  h.pages.crc = 0;  // each page has its own checksum (in the directory)
-  section(dir.data(), dir.size() * sizeof(PageEntry), &h.directory);
-  h.file_size = h.directory.offset + h.directory.size;
-  if (::ftruncate(f.fd, off_t(h.file_size)) != 0) io::fail(path, "truncate failed");
-  h.header_crc = 0;
-  h.header_crc = crc32c(&h, sizeof h);
-  io::pwrite_all(f.fd, f.path, &h, sizeof h, 0);
-  if (::fsync(f.fd) != 0) io::fail(path, "fsync failed");
-  if (::close(f.fd) != 0) {
-    f.fd = -1;
-    io::fail(path, "close failed");
-  }
-  f.fd = -1;
-}
-
-void write_store_atomic(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
-  const std::string tmp = path + ".tmp";
-  try {
-    write_store(t, tmp, opt);
-    if (::rename(tmp.c_str(), path.c_str()) != 0) io::fail(path, "rename failed");
-  } catch (...) {
-    ::unlink(tmp.c_str());
-    throw;
-  }
-  // Make the rename durable.
-  std::string dir = path.substr(0, path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/'));
-  if (dir.empty()) dir = path.find('/') == 0 ? "/" : ".";
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    (void)::fsync(dfd);
-    ::close(dfd);
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Reader
 namespace {
 
 bool finite3(const float* f) { return std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]); }
@@ -693,7 +341,7 @@ std::unique_ptr<Page> StoreReader::load_page(std::uint32_t id, std::uint64_t* by
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
   T.leaf_level = L;
   T.num_triangles = ph.nlocal;
-  set_tree_closed(T, (h_.flags & kStoreClosed) != 0, 0);
+  T.closed = (h_.flags & kStoreClosed) != 0;
   compute_leaf_blocks(T);  // derived boxes (not in the file)
   page->chain = chain;
   return page;
@@ -706,7 +354,7 @@ Octree StoreReader::load_all() const {
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
   T.leaf_level = int(h_.leaf_level);
   T.num_triangles = h_.num_triangles;
-  set_tree_closed(T, (h_.flags & kStoreClosed) != 0, 0);
+  T.closed = (h_.flags & kStoreClosed) != 0;
   std::map<std::uint32_t, std::unique_ptr<Page>> pages;
   // Copies node i of page pg's tree (page-local indexing) into T, pre-order.
   std::function<std::uint32_t(const Page&, std::uint32_t)> copy_page = [&](const Page& pg, std::uint32_t i) {

@@ -1,0 +1,30 @@
+#pragma once
+/// Writes an in-memory Octree as a `.ebp` store (format.hpp): the tree cut into a pinned top and
+/// pages of sibling subtrees packed up to a target size, each page encoded by page_codec.hpp.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "methods/ebp_octree/core/octree.hpp"
+
+namespace ebp {
+
+/// Options of the writer.
+struct StoreWriteOptions {
+  std::size_t page_target = 64 * 1024;  ///< bytes: subtrees are packed into pages up to this size
+  BuildParams params;                   ///< recorded in the header
+  std::string info_json = "{}";        ///< build statistics, recorded in the info section
+  std::function<void(double)> progress;
+  /// Test hook: called before each page is written (throw to simulate a failure midway).
+  std::function<void(std::uint32_t page)> before_page;
+};
+
+/// Writes `tree` as a `.ebp` at `path` (the file is written in place: callers wanting atomicity
+/// write to a temporary name and rename, as `write_store_atomic` does). Throws std::runtime_error
+/// on an I/O error (naming the file).
+void write_store(const Octree& tree, const std::string& path, const StoreWriteOptions& opt);
+/// write_store to `path + ".tmp"`, fsync, rename to `path`; on any failure removes the temporary.
+void write_store_atomic(const Octree& tree, const std::string& path, const StoreWriteOptions& opt);
+
+}  // namespace ebp
