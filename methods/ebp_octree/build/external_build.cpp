@@ -27,6 +27,7 @@
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
+#include "harness/util/binary_file.hpp"
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
@@ -252,8 +253,8 @@ struct Patch {
 /// and pages, the page file.
 class Assembler {
  public:
-  Assembler(const BuildContext& ctx, const ExtBuildOptions& opt, int fd, const std::string& path, std::uint64_t pages_off)
-      : off_(pages_off), ctx_(ctx), opt_(opt), fd_(fd), path_(path), L_(ctx.f.leaf_level),
+  Assembler(const BuildContext& ctx, const ExtBuildOptions& opt, bvhbench::AtomicOutputFile& out, std::uint64_t pages_off)
+      : off_(pages_off), ctx_(ctx), opt_(opt), out_(out), L_(ctx.f.leaf_level),
         target_(std::max<std::size_t>(opt.page_target, 4096)) {
     sk.leaf_level = L_;
     stack_.reserve(std::size_t(kMaxLevel) + 2);
@@ -558,7 +559,7 @@ class Assembler {
     const std::vector<std::uint8_t>& out = page.bytes;
     const std::size_t nodes_at = page.nodes_offset, leaves_at = page.leaves_offset;
     e.offset = off_;
-    pwrite_all(fd_, path_, out.data(), out.size(), off_);
+    out_.write_at(off_, out.data(), out.size());
     off_ = (off_ + out.size() + kPageAlign - 1) / kPageAlign * kPageAlign;
     dir.push_back(e);
     for (std::uint32_t k : tops) top[k].index = id;
@@ -583,8 +584,7 @@ class Assembler {
 
   const BuildContext& ctx_;
   const ExtBuildOptions& opt_;
-  int fd_;
-  std::string path_;
+  bvhbench::AtomicOutputFile& out_;
   int L_;
   std::uint64_t target_;
   std::vector<Open> stack_;
@@ -692,16 +692,6 @@ struct TempFiles {
   std::vector<std::string> paths;
   ~TempFiles() {
     for (const std::string& p : paths) ::unlink(p.c_str());
-  }
-};
-
-struct OutFile {
-  int fd = -1;
-  std::string path;
-  bool keep = false;
-  ~OutFile() {
-    if (fd >= 0) ::close(fd);
-    if (!keep && !path.empty()) ::unlink(path.c_str());
   }
 };
 
@@ -882,12 +872,8 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
 
   // ---- 3. merge; leaves in batches (parallel), inner nodes and pages as subtrees complete ----
   t0 = Clock::now();
-  OutFile out;
-  const std::string tmp_path = path + ".tmp";
-  out.path = tmp_path;
-  out.fd = ::open(tmp_path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  if (out.fd < 0) io::fail(tmp_path, "cannot create");
-  Assembler as(ctx, opt, out.fd, tmp_path, kPageAlign);
+  bvhbench::AtomicOutputFile out(path);  // path + ".tmp" until committed, removed on failure
+  Assembler as(ctx, opt, out, kPageAlign);
   {
     std::vector<std::unique_ptr<RunReader>> readers;
     const std::size_t merge_bytes = avail / 4;
@@ -1107,7 +1093,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
         std::memcpy(&zero[patches[j].off], patches[j].b, patches[j].len);
       e.crc ^= crc32c(zero.data(), e.size) ^ zero_crc;
       for (std::size_t k = i; k < j; ++k) {
-        pwrite_all(out.fd, tmp_path, patches[k].b, patches[k].len, e.offset + patches[k].off);
+        out.write_at(e.offset + patches[k].off, patches[k].b, patches[k].len);
         std::memset(&zero[patches[k].off], 0, patches[k].len);
       }
       i = j;
@@ -1177,7 +1163,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     s->offset = off;
     s->size = n;
     s->crc = crc32c(data, n);
-    if (n) pwrite_all(out.fd, tmp_path, data, n, off);
+    if (n) out.write_at(off, data, n);
     off = (off + n + 7) / 8 * 8;
   };
   section(as.dir.data(), as.dir.size() * sizeof(PageEntry), &h.directory);
@@ -1187,27 +1173,13 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const std::string info = opt.info_json ? opt.info_json(R) : std::string("{}");
   section(info.data(), info.size(), &h.info);
   h.file_size = h.info.offset + h.info.size;
-  if (::ftruncate(out.fd, off_t(h.file_size)) != 0) io::fail(tmp_path, "truncate failed");
+  out.resize(h.file_size);
   h.header_crc = 0;
   h.header_crc = crc32c(&h, sizeof h);
-  pwrite_all(out.fd, tmp_path, &h, sizeof h, 0);
+  out.write_at(0, &h, sizeof h);
   R.file_bytes = h.file_size;
   check();
-  if (::fsync(out.fd) != 0) io::fail(tmp_path, "fsync failed");
-  const int fd = out.fd;
-  out.fd = -1;
-  if (::close(fd) != 0) io::fail(tmp_path, "close failed");
-  if (::rename(tmp_path.c_str(), path.c_str()) != 0) io::fail(path, "rename failed");
-  out.keep = true;
-  {  // make the rename durable
-    const auto slash = path.find_last_of('/');
-    const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-      (void)::fsync(dfd);
-      ::close(dfd);
-    }
-  }
+  out.commit_durable();
   R.seconds_total = since(t_start);
   progress("done", 1.0);
   return R;

@@ -2,32 +2,21 @@
 // and pages, encodes each page (page_codec.hpp) and writes the file. See OUT_OF_CORE.md.
 #include "methods/ebp_octree/store/writer.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstring>
 #include <functional>
 #include <stdexcept>
 
+#include "harness/util/binary_file.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/page_codec.hpp"
-#include "methods/ebp_octree/store/posix_io.hpp"
 
 namespace ebp {
 
 namespace {
 
 std::uint64_t align_up(std::uint64_t v, std::uint64_t a) { return (v + a - 1) / a * a; }
-
-struct Fd {
-  int fd = -1;
-  std::string path;
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-};
 
 /// The cut of the tree into a pinned top and pages (subtrees packed by parent).
 struct PageSpec {
@@ -166,13 +155,10 @@ PageArrays page_arrays(const Octree& t, const PageSpec& spec) {
 
 }  // namespace
 
-void write_store(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
+void write_store_atomic(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
   if (t.nodes.empty()) throw std::invalid_argument("ebp store: empty tree");
   const Plan P = plan_pages(t, std::max<std::size_t>(opt.page_target, 4096));
-  Fd f;
-  f.path = path;
-  f.fd = ::open(path.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  if (f.fd < 0) io::fail(path, "cannot create");
+  bvhbench::AtomicOutputFile f(path);
 
   FileHeader h{};
   std::memcpy(h.magic, kStoreMagic, 8);
@@ -206,7 +192,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
     s->offset = off;
     s->size = n;
     s->crc = crc32c(data, n);
-    if (n) io::pwrite_all(f.fd, f.path, data, n, off);
+    if (n) f.write_at(off, data, n);
     off = align_up(off + n, 8);
   };
   section(P.top.data(), P.top.size() * sizeof(TopNode), &h.top_nodes);
@@ -223,7 +209,7 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
     PageArrays arrays = page_arrays(t, P.pages[id]);
     const std::vector<std::uint8_t> blob = encode_page(arrays, id, P.pages[id].parent, &e).bytes;
     e.offset = off;
-    io::pwrite_all(f.fd, f.path, blob.data(), blob.size(), off);
+    f.write_at(off, blob.data(), blob.size());
     off = align_up(off + blob.size(), kPageAlign);
     if (opt.progress) opt.progress(double(id + 1) / double(P.pages.size()));
   }
@@ -231,35 +217,11 @@ void write_store(const Octree& t, const std::string& path, const StoreWriteOptio
   h.pages.crc = 0;  // each page has its own checksum (in the directory)
   section(dir.data(), dir.size() * sizeof(PageEntry), &h.directory);
   h.file_size = h.directory.offset + h.directory.size;
-  if (::ftruncate(f.fd, off_t(h.file_size)) != 0) io::fail(path, "truncate failed");
+  f.resize(h.file_size);
   h.header_crc = 0;
   h.header_crc = crc32c(&h, sizeof h);
-  io::pwrite_all(f.fd, f.path, &h, sizeof h, 0);
-  if (::fsync(f.fd) != 0) io::fail(path, "fsync failed");
-  if (::close(f.fd) != 0) {
-    f.fd = -1;
-    io::fail(path, "close failed");
-  }
-  f.fd = -1;
-}
-
-void write_store_atomic(const Octree& t, const std::string& path, const StoreWriteOptions& opt) {
-  const std::string tmp = path + ".tmp";
-  try {
-    write_store(t, tmp, opt);
-    if (::rename(tmp.c_str(), path.c_str()) != 0) io::fail(path, "rename failed");
-  } catch (...) {
-    ::unlink(tmp.c_str());
-    throw;
-  }
-  // Make the rename durable.
-  std::string dir = path.substr(0, path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/'));
-  if (dir.empty()) dir = path.find('/') == 0 ? "/" : ".";
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    (void)::fsync(dfd);
-    ::close(dfd);
-  }
+  f.write_at(0, &h, sizeof h);
+  f.commit_durable();
 }
 
 }  // namespace ebp

@@ -20,11 +20,10 @@ struct StoreWriteOptions {
   std::function<void(std::uint32_t page)> before_page;
 };
 
-/// Writes `tree` as a `.ebp` at `path` (the file is written in place: callers wanting atomicity
-/// write to a temporary name and rename, as `write_store_atomic` does). Throws std::runtime_error
-/// on an I/O error (naming the file).
-void write_store(const Octree& tree, const std::string& path, const StoreWriteOptions& opt);
-/// write_store to `path + ".tmp"`, fsync, rename to `path`; on any failure removes the temporary.
+/// Writes `tree` as a `.ebp` at `path`, atomically: to `path + ".tmp"` (bvhbench::AtomicOutputFile),
+/// fsync'ed, then renamed; on any failure the temporary is removed and `path` is left as it was.
+/// Throws std::runtime_error on an I/O error (naming the file), std::invalid_argument on an empty
+/// tree.
 void write_store_atomic(const Octree& tree, const std::string& path, const StoreWriteOptions& opt);
 
 }  // namespace ebp
