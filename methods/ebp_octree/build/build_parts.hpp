@@ -1,6 +1,6 @@
 #pragma once
-/// The pieces of the EBP-Octree builder that the in-memory `Octree::build` (ebp_build.cpp) and the
-/// external-memory build (ebp_extbuild.cpp) share, so that both compute every node with the very
+/// The pieces of the EBP-Octree builder that the in-memory `Octree::build` (octree_build.cpp) and the
+/// external-memory build (external_build.cpp) share, so that both compute every node with the very
 /// same code: the frame (root cube, leaf level), the distribution of one triangle to leaf cells,
 /// one leaf (triangle block, planes, configuration, reference point, colouring half-edges), one
 /// inner node (planes from its children's bounding volumes), and the colouring (union-find with

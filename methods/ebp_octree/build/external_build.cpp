@@ -1,4 +1,4 @@
-// External-memory build of the `.ebp` store. See ebp_extbuild.hpp and OUT_OF_CORE.md
+// External-memory build of the `.ebp` store. See external_build.hpp and OUT_OF_CORE.md
 // ("`bvhbench ebp build`"): streamed mesh, sorted runs spilled and merged, leaves and inner nodes
 // built in octcode order by the in-memory builder's code, pages written as subtrees complete,
 // colouring over the node skeleton patched into the pages at the end.

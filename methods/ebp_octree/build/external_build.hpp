@@ -1,5 +1,5 @@
 #pragma once
-/// External-memory build of the `.ebp` store (issue 7; OUT_OF_CORE.md, "`bvhbench ebp build`"):
+/// External-memory build of the `.ebp` store (OUT_OF_CORE.md, "`bvhbench ebp build`"):
 /// the mesh is streamed (never held in double precision), the (leaf cell, triangle) records are
 /// sorted in runs that fit the memory budget, spilled to a temporary directory and merged; leaves
 /// and inner nodes are built in octcode order from the merged stream with the in-memory builder's

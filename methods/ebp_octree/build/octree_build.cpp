@@ -31,6 +31,7 @@
 #include "methods/ebp_octree/build/tri_box.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 #include "methods/ebp_octree/core/reference_points.hpp"
 
@@ -39,8 +40,6 @@ namespace ebp {
 using detail::BuildContext;
 
 namespace {
-
-Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }

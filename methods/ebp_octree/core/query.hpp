@@ -64,6 +64,7 @@ class Query {
   QueryCounters counters;
 
  private:
+  class DistanceSearch;  // one distance_bound call, step by step (query_distance.cpp)
   std::uint32_t locate(const Vec3d& p, bool* outside_root);
   bool classify_leaf(const Vec3d& p, const Leaf& leaf, std::uint32_t leaf_index, std::uint32_t node);
   const Octree& t_;

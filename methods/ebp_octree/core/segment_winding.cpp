@@ -4,13 +4,10 @@
 
 #include <vector>
 
+#include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
 namespace ebp {
-
-namespace {
-Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
-}  // namespace
 
 bool segment_winding(const Vec3d& p, const Vec3d& q, const LeafTri* const* list, std::size_t n, int* delta) {
   int w = 0;

@@ -8,6 +8,8 @@
 // the in-memory answer is whatever its visiting order: the same answer, bit for bit.
 #include "methods/ebp_octree/store/out_of_core.hpp"
 
+#include "methods/ebp_octree/core/float_coords.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -94,7 +96,6 @@ struct TopItem {
   std::uint32_t node;
   int level;
 };
-inline Vec3d to_d(const float* f) { return {double(f[0]), double(f[1]), double(f[2])}; }
 }  // namespace
 
 /// The best triangle so far of one distance query, over all pages.

@@ -1,5 +1,5 @@
 #pragma once
-/// The page cache of the out-of-core EBP-Octree: decoded pages (ebp_store.hpp) with their query
+/// The page cache of the out-of-core EBP-Octree: decoded pages (reader.hpp) with their query
 /// state, under a byte budget, least recently used evicted first. The top tree, the directory
 /// and the per-page bookkeeping (24 bytes a page) are pinned outside the budget. A page larger
 /// than the whole budget is still loaded (everything else is evicted first), so any budget works.

@@ -1,4 +1,4 @@
-// The whole-store check (ebp_verify.hpp): the reader's open, then every page through the reader's
+// The whole-store check (verify.hpp): the reader's open, then every page through the reader's
 // own load_page, in batches decoded in parallel and judged in page order, then the counts.
 #include "methods/ebp_octree/store/verify.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"

@@ -1,4 +1,4 @@
-// The external-memory build of the `.ebp` store (ebp_extbuild.hpp; OUT_OF_CORE.md): with tiny
+// The external-memory build of the `.ebp` store (build/external_build.hpp; OUT_OF_CORE.md): with tiny
 // sort runs (many runs spilled and merged) and small pages (many subtrees cut), the store must be
 // the one the in-memory build writes — same header counts, same top tree, same pages byte for
 // byte — and answer exactly as the in-memory octree; failures leave neither the store nor
