@@ -1,4 +1,4 @@
-// Exact point-in-solid (Query::inside): the leaf holding the point, its colour if empty, else
+// Exact point-in-solid (Query::inside): the leaf holding the point (Query::locate), its colour if empty, else
 // the winding number by signed segment crossings from the leaf's reference point (DESIGN.md,
 // "Inside"), or, on a coherent path over a closed mesh, from the previous point.
 #include <algorithm>
@@ -38,6 +38,50 @@ inline float float_up(double x) {
   return double(f) < x ? float_step(f, 1) : f;
 }
 }  // namespace
+
+// Point location by octcode descent, with the coherent shortcut (the previous point's node when
+// p is in its cell). In this file so that the compiler can inline it into inside().
+std::uint32_t Query::locate(const Vec3d& p, bool* outside_root) {
+  const double inv = double(std::uint64_t(1) << t_.leaf_level) / t_.root_size;
+  const double G = double(std::uint64_t(1) << t_.leaf_level);
+  const double rx = (p.x - t_.root_lo.x) * inv, ry = (p.y - t_.root_lo.y) * inv, rz = (p.z - t_.root_lo.z) * inv;
+  if (!(rx >= 0 && ry >= 0 && rz >= 0 && rx <= G && ry <= G && rz <= G)) {
+    *outside_root = true;
+    return UINT32_MAX;
+  }
+  *outside_root = false;
+  const std::uint32_t gmax = (1u << t_.leaf_level) - 1;
+  const std::uint32_t x = std::min(std::uint32_t(rx), gmax), y = std::min(std::uint32_t(ry), gmax),
+                      z = std::min(std::uint32_t(rz), gmax);
+  if (coherent_ && last_node_ != UINT32_MAX) {
+    const int sh = t_.leaf_level - last_level_;
+    if ((x >> sh) == last_cell_[0] && (y >> sh) == last_cell_[1] && (z >> sh) == last_cell_[2]) {
+      ++counters.nodes_visited;
+      return last_node_;
+    }
+  }
+  std::uint32_t i = 0;
+  const Node* nodes = t_.nodes.data();
+  const std::uint32_t* ch = t_.children.data();
+  int level = 0;
+  ++counters.nodes_visited;
+  while (nodes[i].kind == NodeKind::inner) {
+    const int shift = t_.leaf_level - level - 1;
+    const std::uint32_t o = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+    i = ch[nodes[i].index + o];
+    ++level;
+    ++counters.nodes_visited;
+  }
+  if (coherent_) {
+    last_node_ = i;
+    last_level_ = level;
+    const int sh = t_.leaf_level - level;
+    last_cell_[0] = x >> sh;
+    last_cell_[1] = y >> sh;
+    last_cell_[2] = z >> sh;
+  }
+  return i;
+}
 
 bool Query::inside(const Vec3d& p) {
   bool outside_root;
