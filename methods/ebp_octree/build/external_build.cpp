@@ -35,6 +35,7 @@
 #include "methods/ebp_octree/core/predicates.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/store_file.hpp"
 
 namespace ebp {
 
@@ -480,19 +481,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   R.pages = as.dir.size();
   R.top_nodes = as.top.size();
 
-  FileHeader h{};
-  std::memcpy(h.magic, kStoreMagic, 8);
-  h.version = kStoreVersion;
-  h.header_size = sizeof(FileHeader);
-  for (int k = 0; k < 3; ++k) h.root_lo[k] = F.root_lo[k];
-  h.root_size = F.root_size;
-  h.leaf_level = std::uint32_t(L);
-  h.num_triangles = std::uint32_t(nt);
-  h.leaf_factor = prm.leaf_factor;
-  h.cluster_angle = prm.cluster_angle;
-  h.max_planes = prm.max_planes;
-  h.page_target = std::uint32_t(std::max<std::size_t>(opt.page_target, 4096));
-  h.flags = R.closed ? kStoreClosed : 0;
+  FileHeader h = new_file_header(F.root_lo, F.root_size, L, std::uint32_t(nt), prm, opt.page_target, R.closed);
   h.nodes = N;
   h.inner = S.inner;
   h.leaves = S.leaves;
@@ -508,13 +497,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   h.pages.size = as.off_ - kPageAlign;
   h.pages.crc = 0;  // each page has its own checksum (in the directory)
   std::uint64_t off = as.off_;
-  auto section = [&](const void* data, std::size_t n, Section* s) {
-    s->offset = off;
-    s->size = n;
-    s->crc = crc32c(data, n);
-    if (n) out.write_at(off, data, n);
-    off = (off + n + 7) / 8 * 8;
-  };
+  auto section = [&](const void* data, std::size_t n, Section* s) { write_section(out, &off, data, n, s); };
   section(as.dir.data(), as.dir.size() * sizeof(PageEntry), &h.directory);
   section(as.top.data(), as.top.size() * sizeof(TopNode), &h.top_nodes);
   section(as.top_children.data(), as.top_children.size() * sizeof(std::uint32_t), &h.top_children);
@@ -522,10 +505,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const std::string info = opt.info_json ? opt.info_json(R) : std::string("{}");
   section(info.data(), info.size(), &h.info);
   h.file_size = h.info.offset + h.info.size;
-  out.resize(h.file_size);
-  h.header_crc = 0;
-  h.header_crc = crc32c(&h, sizeof h);
-  out.write_at(0, &h, sizeof h);
+  write_header(out, h);
   R.file_bytes = h.file_size;
   check();
   out.commit_durable();

@@ -8,9 +8,9 @@
 #include <stdexcept>
 
 #include "harness/util/binary_file.hpp"
-#include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/page_codec.hpp"
+#include "methods/ebp_octree/store/store_file.hpp"
 
 namespace ebp {
 
@@ -160,19 +160,8 @@ void write_store_atomic(const Octree& t, const std::string& path, const StoreWri
   const Plan P = plan_pages(t, std::max<std::size_t>(opt.page_target, 4096));
   bvhbench::AtomicOutputFile f(path);
 
-  FileHeader h{};
-  std::memcpy(h.magic, kStoreMagic, 8);
-  h.version = kStoreVersion;
-  h.header_size = sizeof(FileHeader);
-  for (int k = 0; k < 3; ++k) h.root_lo[k] = t.root_lo[k];
-  h.root_size = t.root_size;
-  h.leaf_level = std::uint32_t(t.leaf_level);
-  h.num_triangles = t.num_triangles;
-  h.leaf_factor = opt.params.leaf_factor;
-  h.cluster_angle = opt.params.cluster_angle;
-  h.max_planes = opt.params.max_planes;
-  h.page_target = std::uint32_t(std::max<std::size_t>(opt.page_target, 4096));
-  h.flags = t.closed ? kStoreClosed : 0;
+  FileHeader h = new_file_header(t.root_lo, t.root_size, t.leaf_level, t.num_triangles, opt.params,
+                                 opt.page_target, t.closed);
   h.nodes = t.nodes.size();
   h.leaves = t.leaves.size();
   for (const Node& nd : t.nodes) {
@@ -188,13 +177,7 @@ void write_store_atomic(const Octree& t, const std::string& path, const StoreWri
   h.num_top_planes = P.top_planes.size();
 
   std::uint64_t off = sizeof(FileHeader);
-  auto section = [&](const void* data, std::size_t n, Section* s) {
-    s->offset = off;
-    s->size = n;
-    s->crc = crc32c(data, n);
-    if (n) f.write_at(off, data, n);
-    off = align_up(off + n, 8);
-  };
+  auto section = [&](const void* data, std::size_t n, Section* s) { write_section(f, &off, data, n, s); };
   section(P.top.data(), P.top.size() * sizeof(TopNode), &h.top_nodes);
   section(P.top_children.data(), P.top_children.size() * sizeof(std::uint32_t), &h.top_children);
   section(P.top_planes.data(), P.top_planes.size() * sizeof(Plane), &h.top_planes);
@@ -217,10 +200,7 @@ void write_store_atomic(const Octree& t, const std::string& path, const StoreWri
   h.pages.crc = 0;  // each page has its own checksum (in the directory)
   section(dir.data(), dir.size() * sizeof(PageEntry), &h.directory);
   h.file_size = h.directory.offset + h.directory.size;
-  f.resize(h.file_size);
-  h.header_crc = 0;
-  h.header_crc = crc32c(&h, sizeof h);
-  f.write_at(0, &h, sizeof h);
+  write_header(f, h);
   f.commit_durable();
 }
 
