@@ -9,20 +9,9 @@
 
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/page_codec.hpp"
 
 namespace ebp {
-
-/// A loaded page: an ordinary Octree (global frame, chain from the root, see above) and the map
-/// from its local triangle indices to the input mesh's.
-struct Page {
-  std::uint32_t id = 0;
-  std::uint32_t chain = 0;  ///< nodes[0, chain - 1) are the root-to-parent chain, nodes[chain - 1] the dummy (0: root page)
-  Octree tree;
-  std::vector<std::uint32_t> global_tri;
-  std::size_t bytes() const {
-    return tree.bytes() + tree.derived_bytes() + global_tri.capacity() * sizeof(std::uint32_t);
-  }
-};
 
 /// The read side: header, top tree and directory in memory (pinned), pages on demand.
 class StoreReader {
@@ -59,6 +48,7 @@ class StoreReader {
 
  private:
   void open_and_check();
+  PageContext page_context(std::uint32_t id) const;
   void read_at(std::uint64_t off, void* dst, std::size_t n) const;
   [[noreturn]] void fail(const std::string& what) const;
   std::string path_;
