@@ -53,24 +53,22 @@ std::uint64_t mix64(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-}  // namespace
-
-ExtBuildReport build_store_external(TriangleSource& src, const std::string& path, const ExtBuildOptions& opt) {
-  const auto t_start = Clock::now();
-  ExtBuildReport R;
-  const BuildParams& prm = opt.params;
-  const int threads = std::max(1, prm.threads);
+/// The frame pass (phase 1): bounding box and edge sum in input order (FrameAccumulator), and
+/// whether the mesh is closed (every undirected edge used equally often both ways: two hashed sums
+/// of the directed edges are zero; only for fewer than 2^31 vertices).
+struct FrameScan {
+  FrameAccumulator acc;
+  bool closed = false;
+};
+FrameScan scan_frame(TriangleSource& src, tbb::task_arena& arena, const ExtBuildOptions& opt) {
   auto progress = [&](const char* phase, double f) {
     if (opt.progress) opt.progress(phase, f);
   };
   auto check = [&] {
     if (opt.check) opt.check();
   };
-  tbb::task_arena arena(threads);
-
-  // ---- 1. frame (streaming): bounding box, average edge, closedness, sha256 ----
-  auto t0 = Clock::now();
-  FrameAccumulator acc;
+  FrameScan out;
+  FrameAccumulator& acc = out.acc;
   std::uint64_t s1 = 0, s2 = 0;
   const bool check_closed = src.num_vertices() < (std::uint64_t(1) << 31);
   {
@@ -127,35 +125,32 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
       }
     });
   }
-  const std::uint64_t nt = acc.triangles;
-  if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
-  if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
-  R.closed = check_closed && s1 == 0 && s2 == 0;
-  const Frame F = compute_frame(acc, prm);
-  const BuildContext ctx(F, prm);
-  const int L = F.leaf_level;
-  R.seconds_frame = since(t0);
-  progress("frame", 0.05);
+  out.closed = check_closed && s1 == 0 && s2 == 0;
+  return out;
+}
 
-  // Memory plan: the source's resident bytes and a fixed reserve come first; the rest goes to the
-  // sort runs (phase 2), then to the merge buffers and the leaf batches (phase 3).
-  // Also set aside what grows with the model and is kept to the end: the node skeleton, the
-  // union-find, the top tree and the patch list, ≈ 2.2 B per triangle measured on the 32M
-  // models (at the default leaf_factor); 3 B per triangle is reserved.
-  const std::size_t reserve = (std::size_t(48) << 20) + std::size_t(3 * nt);
-  const std::size_t resident = src.resident_bytes();
-  R.min_budget_bytes = resident + reserve + (std::size_t(8) << 20);
-  std::size_t avail = opt.memory_budget > resident + reserve ? opt.memory_budget - resident - reserve : 0;
-  avail = std::max<std::size_t>(avail, std::size_t(8) << 20);
-  std::size_t run_cap = (opt.run_bytes ? opt.run_bytes : avail / 2) / sizeof(Rec);
-  run_cap = std::max<std::size_t>(run_cap, 64);
-  R.run_capacity_records = run_cap;
-
-  // ---- 2. distribution into sorted runs ----
-  t0 = Clock::now();
-  TempFiles run_files;
+/// The records after phase 2: spilled sorted runs (`runs`, their `files`), or, when every record
+/// fitted one run, that run sorted in memory (`runs` empty).
+struct SortedRecords {
+  TempFiles files;
   std::vector<RunFile> runs;
   std::vector<Rec> run;
+};
+
+/// The distribution pass (phase 2): every triangle's (leaf cell, triangle) records, in runs of at
+/// most `run_cap` records, each sorted and spilled to opt.tmp_dir when full, into `sorted`.
+void distribute_to_runs(TriangleSource& src, const BuildContext& ctx, tbb::task_arena& arena,
+                        const ExtBuildOptions& opt, std::uint64_t nt, std::size_t run_cap, ExtBuildReport& R,
+                        SortedRecords& sorted) {
+  auto progress = [&](const char* phase, double f) {
+    if (opt.progress) opt.progress(phase, f);
+  };
+  auto check = [&] {
+    if (opt.check) opt.check();
+  };
+  TempFiles& run_files = sorted.files;
+  std::vector<RunFile>& runs = sorted.runs;
+  std::vector<Rec>& run = sorted.run;
   run.reserve(std::min<std::size_t>(run_cap, std::size_t(nt) * 3 + 64));
   auto sort_run = [&] {
     arena.execute([&] { tbb::parallel_sort(run.begin(), run.end(), RecLess()); });
@@ -217,6 +212,106 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     sort_run();
   }
   R.runs = runs.empty() ? 1 : runs.size();
+}
+
+/// Writes the colouring into the pages (phase 4): the kind byte of each empty node found black,
+/// the winding number of each leaf's reference point (both zero when written), and each patched
+/// page's checksum updated from the patch bytes alone.
+void patch_colouring(bvhbench::AtomicOutputFile& out, Assembler& as, const Colouring& C,
+                     const std::vector<std::uint8_t>& is_black) {
+  std::vector<Patch> patches;
+  for (const auto& [g, p] : as.white_loc)
+    if (is_black[g]) {
+      Patch q = p;
+      q.len = 1;
+      q.b[0] = std::uint8_t(NodeKind::black);
+      patches.push_back(q);
+    }
+  for (std::size_t li = 0; li < as.leaf_loc.size(); ++li)
+    if (C.ref_winding[li] != 0) {
+      Patch q = as.leaf_loc[li];
+      q.len = 2;
+      std::memcpy(q.b, &C.ref_winding[li], 2);
+      patches.push_back(q);
+    }
+  std::sort(patches.begin(), patches.end(),
+            [](const Patch& a, const Patch& b) { return a.page < b.page || (a.page == b.page && a.off < b.off); });
+  {
+    // CRC-32C is affine in the message: crc(x ^ d) = crc(x) ^ crc(d) ^ crc(0...0) (same length),
+    // and the patched fields are zero before: the new checksum needs only the patch bytes.
+    std::vector<std::uint8_t> zero;
+    std::uint32_t zero_crc = 0;
+    std::size_t zero_len = SIZE_MAX;
+    for (std::size_t i = 0; i < patches.size();) {
+      std::size_t j = i;
+      PageEntry& e = as.dir[patches[i].page];
+      if (zero.size() < e.size) zero.resize(e.size, 0);
+      if (zero_len != e.size) {
+        zero_crc = crc32c(zero.data(), e.size);
+        zero_len = e.size;
+      }
+      for (; j < patches.size() && patches[j].page == patches[i].page; ++j)
+        std::memcpy(&zero[patches[j].off], patches[j].b, patches[j].len);
+      e.crc ^= crc32c(zero.data(), e.size) ^ zero_crc;
+      for (std::size_t k = i; k < j; ++k) {
+        out.write_at(e.offset + patches[k].off, patches[k].b, patches[k].len);
+        std::memset(&zero[patches[k].off], 0, patches[k].len);
+      }
+      i = j;
+    }
+  }
+}
+
+}  // namespace
+
+ExtBuildReport build_store_external(TriangleSource& src, const std::string& path, const ExtBuildOptions& opt) {
+  const auto t_start = Clock::now();
+  ExtBuildReport R;
+  const BuildParams& prm = opt.params;
+  const int threads = std::max(1, prm.threads);
+  auto progress = [&](const char* phase, double f) {
+    if (opt.progress) opt.progress(phase, f);
+  };
+  auto check = [&] {
+    if (opt.check) opt.check();
+  };
+  tbb::task_arena arena(threads);
+
+  // ---- 1. frame (streaming): bounding box, average edge, closedness, sha256 ----
+  auto t0 = Clock::now();
+  const FrameScan scan = scan_frame(src, arena, opt);
+  const FrameAccumulator& acc = scan.acc;
+  const std::uint64_t nt = acc.triangles;
+  if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
+  if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
+  R.closed = scan.closed;
+  const Frame F = compute_frame(acc, prm);
+  const BuildContext ctx(F, prm);
+  const int L = F.leaf_level;
+  R.seconds_frame = since(t0);
+  progress("frame", 0.05);
+
+  // Memory plan: the source's resident bytes and a fixed reserve come first; the rest goes to the
+  // sort runs (phase 2), then to the merge buffers and the leaf batches (phase 3).
+  // Also set aside what grows with the model and is kept to the end: the node skeleton, the
+  // union-find, the top tree and the patch list, ≈ 2.2 B per triangle measured on the 32M
+  // models (at the default leaf_factor); 3 B per triangle is reserved.
+  const std::size_t reserve = (std::size_t(48) << 20) + std::size_t(3 * nt);
+  const std::size_t resident = src.resident_bytes();
+  R.min_budget_bytes = resident + reserve + (std::size_t(8) << 20);
+  std::size_t avail = opt.memory_budget > resident + reserve ? opt.memory_budget - resident - reserve : 0;
+  avail = std::max<std::size_t>(avail, std::size_t(8) << 20);
+  std::size_t run_cap = (opt.run_bytes ? opt.run_bytes : avail / 2) / sizeof(Rec);
+  run_cap = std::max<std::size_t>(run_cap, 64);
+  R.run_capacity_records = run_cap;
+
+  // ---- 2. distribution into sorted runs ----
+  t0 = Clock::now();
+  SortedRecords sorted;
+  distribute_to_runs(src, ctx, arena, opt, nt, run_cap, R, sorted);
+  TempFiles& run_files = sorted.files;
+  std::vector<RunFile>& runs = sorted.runs;
+  std::vector<Rec>& run = sorted.run;
   R.seconds_distribute = since(t0);
   check();
 
@@ -408,47 +503,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const std::size_t N = sk.code.size();
   std::vector<std::uint8_t> is_black(N, 0);
   for (std::uint32_t i : C.black) is_black[i] = 1;
-  std::vector<Patch> patches;
-  for (const auto& [g, p] : as.white_loc)
-    if (is_black[g]) {
-      Patch q = p;
-      q.len = 1;
-      q.b[0] = std::uint8_t(NodeKind::black);
-      patches.push_back(q);
-    }
-  for (std::size_t li = 0; li < as.leaf_loc.size(); ++li)
-    if (C.ref_winding[li] != 0) {
-      Patch q = as.leaf_loc[li];
-      q.len = 2;
-      std::memcpy(q.b, &C.ref_winding[li], 2);
-      patches.push_back(q);
-    }
-  std::sort(patches.begin(), patches.end(),
-            [](const Patch& a, const Patch& b) { return a.page < b.page || (a.page == b.page && a.off < b.off); });
-  {
-    // CRC-32C is affine in the message: crc(x ^ d) = crc(x) ^ crc(d) ^ crc(0...0) (same length),
-    // and the patched fields are zero before: the new checksum needs only the patch bytes.
-    std::vector<std::uint8_t> zero;
-    std::uint32_t zero_crc = 0;
-    std::size_t zero_len = SIZE_MAX;
-    for (std::size_t i = 0; i < patches.size();) {
-      std::size_t j = i;
-      PageEntry& e = as.dir[patches[i].page];
-      if (zero.size() < e.size) zero.resize(e.size, 0);
-      if (zero_len != e.size) {
-        zero_crc = crc32c(zero.data(), e.size);
-        zero_len = e.size;
-      }
-      for (; j < patches.size() && patches[j].page == patches[i].page; ++j)
-        std::memcpy(&zero[patches[j].off], patches[j].b, patches[j].len);
-      e.crc ^= crc32c(zero.data(), e.size) ^ zero_crc;
-      for (std::size_t k = i; k < j; ++k) {
-        out.write_at(e.offset + patches[k].off, patches[k].b, patches[k].len);
-        std::memset(&zero[patches[k].off], 0, patches[k].len);
-      }
-      i = j;
-    }
-  }
+  patch_colouring(out, as, C, is_black);
   for (std::size_t k = 0; k < as.top.size(); ++k)
     if (as.top[k].kind == TopKind::white && is_black[as.top_gid[k]]) as.top[k].kind = TopKind::black;
   std::vector<Plane> top_planes;
