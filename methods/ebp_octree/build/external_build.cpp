@@ -214,6 +214,180 @@ void distribute_to_runs(TriangleSource& src, const BuildContext& ctx, tbb::task_
   R.runs = runs.empty() ? 1 : runs.size();
 }
 
+/// The merge and the assembly (phase 3): the sorted records merged (a heap over the run readers,
+/// or the run in memory), each leaf cell's records built into a leaf (build_leaf, in parallel
+/// batches), the batches handed to the assembler in a second thread (inner nodes, the cut, the
+/// pages written as their subtrees complete), at most 3 batches alive.
+void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_arena& arena,
+                        const ExtBuildOptions& opt, std::size_t avail, ExtBuildReport& R, SortedRecords& sorted,
+                        Assembler& as) {
+  auto progress = [&](const char* phase, double f) {
+    if (opt.progress) opt.progress(phase, f);
+  };
+  auto check = [&] {
+    if (opt.check) opt.check();
+  };
+  const int threads = std::max(1, opt.params.threads);
+  const int L = ctx.f.leaf_level;
+  std::vector<RunFile>& runs = sorted.runs;
+  std::vector<Rec>& run = sorted.run;
+  std::vector<std::unique_ptr<RunReader>> readers;
+  const std::size_t merge_bytes = avail / 4;
+  for (const RunFile& rf : runs)
+    readers.push_back(std::make_unique<RunReader>(rf, merge_bytes / std::max<std::size_t>(1, runs.size()) / sizeof(Rec)));
+  struct HeapEnt {
+    std::uint64_t m;
+    std::uint32_t t, run;
+    bool operator>(const HeapEnt& o) const { return m > o.m || (m == o.m && t > o.t); }
+  };
+  std::priority_queue<HeapEnt, std::vector<HeapEnt>, std::greater<HeapEnt>> heap;
+  for (std::uint32_t i = 0; i < readers.size(); ++i)
+    if (const Rec* r = readers[i]->peek()) heap.push({r->m, r->t, i});
+  std::size_t mem_pos = 0;
+  auto next = [&](Rec* out_rec) -> bool {
+    if (runs.empty()) {
+      if (mem_pos == run.size()) return false;
+      *out_rec = run[mem_pos++];
+      return true;
+    }
+    if (heap.empty()) return false;
+    const HeapEnt h = heap.top();
+    heap.pop();
+    *out_rec = *readers[h.run]->peek();
+    readers[h.run]->pop();
+    if (const Rec* r = readers[h.run]->peek()) heap.push({r->m, r->t, h.run});
+    return true;
+  };
+  // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
+  // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
+  // 3 batches alive (built, queued, assembling), each ≈ avail/12.
+  const float* vf = src.float_vertices();
+  const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + sizeof(LeafTri) + 64));
+  struct Built {
+    std::vector<std::uint64_t> m;
+    std::vector<Node> nodes;
+    std::vector<Leaf> leaves;
+    std::vector<std::vector<LeafTri>> blocks;
+    std::vector<NodeTmp> tmps;
+    std::vector<LeafHalves> halves;
+  };
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<Built> queue;
+  bool closing = false, failed = false;
+  std::exception_ptr asm_err;
+  std::thread assembler([&] {
+    try {
+      for (;;) {
+        Built bt;
+        {
+          std::unique_lock<std::mutex> lk(mu);
+          cv.wait(lk, [&] { return !queue.empty() || closing; });
+          if (queue.empty()) break;
+          bt = std::move(queue.front());
+          queue.pop_front();
+        }
+        cv.notify_all();
+        for (std::size_t i = 0; i < bt.m.size(); ++i)
+          as.add_leaf(bt.m[i], bt.nodes[i], bt.leaves[i], std::move(bt.blocks[i]), std::move(bt.tmps[i]), bt.halves[i]);
+      }
+      bool f;
+      {
+        std::lock_guard<std::mutex> lk(mu);
+        f = failed;
+      }
+      if (!f) as.finish();
+    } catch (...) {
+      std::lock_guard<std::mutex> lk(mu);
+      asm_err = std::current_exception();
+      failed = true;
+    }
+    cv.notify_all();
+  });
+  auto stop_assembler = [&] {
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      closing = true;
+    }
+    cv.notify_all();
+    assembler.join();
+  };
+  try {
+    std::vector<Rec> batch;
+    std::vector<std::size_t> starts;
+    std::uint64_t consumed = 0;
+    auto process = [&] {
+      const std::size_t nl = starts.size();
+      starts.push_back(batch.size());
+      Built bt;
+      bt.m.resize(nl);
+      bt.nodes.resize(nl);
+      bt.leaves.resize(nl);
+      bt.blocks.resize(nl);
+      bt.tmps.resize(nl);
+      bt.halves.resize(nl);
+      auto one = [&](std::size_t i) {
+        const std::size_t b = starts[i], e = starts[i + 1];
+        std::vector<std::uint32_t> tri(e - b);
+        std::vector<float> xyz(9 * (e - b));
+        for (std::size_t k = b; k < e; ++k) {
+          tri[k - b] = batch[k].t;
+          for (int c = 0; c < 3; ++c) std::memcpy(&xyz[9 * (k - b) + 3 * std::size_t(c)], vf + 3 * std::size_t(batch[k].v[c]), 12);
+        }
+        bt.blocks[i].resize(e - b);
+        bt.m[i] = batch[b].m;
+        const Octcode code = octcode_make(L, batch[b].m);
+        build_leaf(ctx, code, e - b, tri.data(), xyz.data(), &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
+                   &bt.tmps[i], &bt.halves[i]);
+      };
+      if (threads <= 1 || nl < 2) {
+        for (std::size_t i = 0; i < nl; ++i) one(i);
+      } else {
+        arena.execute([&] {
+          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
+          });
+        });
+      }
+      {
+        std::unique_lock<std::mutex> lk(mu);
+        cv.wait(lk, [&] { return queue.size() < 1 || failed; });
+        if (failed) return;
+        queue.push_back(std::move(bt));
+      }
+      cv.notify_all();
+      consumed += batch.size();
+      batch.clear();
+      starts.clear();
+      check();
+      progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
+    };
+    Rec r;
+    while (next(&r)) {
+      if (batch.empty() || batch.back().m != r.m) {
+        if (batch.size() >= batch_cap) {
+          process();
+          if (failed) break;
+        }
+        starts.push_back(batch.size());
+      }
+      batch.push_back(r);
+    }
+    if (!batch.empty() && !failed) process();
+    std::vector<Rec>().swap(run);
+  } catch (...) {
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      failed = true;
+      queue.clear();
+    }
+    stop_assembler();
+    throw;
+  }
+  stop_assembler();
+  if (asm_err) std::rethrow_exception(asm_err);
+}
+
 /// Writes the colouring into the pages (phase 4): the kind byte of each empty node found black,
 /// the winding number of each leaf's reference point (both zero when written), and each patched
 /// page's checksum updated from the patch bytes alone.
@@ -310,8 +484,6 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   SortedRecords sorted;
   distribute_to_runs(src, ctx, arena, opt, nt, run_cap, R, sorted);
   TempFiles& run_files = sorted.files;
-  std::vector<RunFile>& runs = sorted.runs;
-  std::vector<Rec>& run = sorted.run;
   R.seconds_distribute = since(t0);
   check();
 
@@ -319,163 +491,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   t0 = Clock::now();
   bvhbench::AtomicOutputFile out(path);  // path + ".tmp" until committed, removed on failure
   Assembler as(ctx, opt, out, kPageAlign);
-  {
-    std::vector<std::unique_ptr<RunReader>> readers;
-    const std::size_t merge_bytes = avail / 4;
-    for (const RunFile& rf : runs)
-      readers.push_back(std::make_unique<RunReader>(rf, merge_bytes / std::max<std::size_t>(1, runs.size()) / sizeof(Rec)));
-    struct HeapEnt {
-      std::uint64_t m;
-      std::uint32_t t, run;
-      bool operator>(const HeapEnt& o) const { return m > o.m || (m == o.m && t > o.t); }
-    };
-    std::priority_queue<HeapEnt, std::vector<HeapEnt>, std::greater<HeapEnt>> heap;
-    for (std::uint32_t i = 0; i < readers.size(); ++i)
-      if (const Rec* r = readers[i]->peek()) heap.push({r->m, r->t, i});
-    std::size_t mem_pos = 0;
-    auto next = [&](Rec* out_rec) -> bool {
-      if (runs.empty()) {
-        if (mem_pos == run.size()) return false;
-        *out_rec = run[mem_pos++];
-        return true;
-      }
-      if (heap.empty()) return false;
-      const HeapEnt h = heap.top();
-      heap.pop();
-      *out_rec = *readers[h.run]->peek();
-      readers[h.run]->pop();
-      if (const Rec* r = readers[h.run]->peek()) heap.push({r->m, r->t, h.run});
-      return true;
-    };
-    // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
-    // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
-    // 3 batches alive (built, queued, assembling), each ≈ avail/12.
-    const float* vf = src.float_vertices();
-    const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + sizeof(LeafTri) + 64));
-    struct Built {
-      std::vector<std::uint64_t> m;
-      std::vector<Node> nodes;
-      std::vector<Leaf> leaves;
-      std::vector<std::vector<LeafTri>> blocks;
-      std::vector<NodeTmp> tmps;
-      std::vector<LeafHalves> halves;
-    };
-    std::mutex mu;
-    std::condition_variable cv;
-    std::deque<Built> queue;
-    bool closing = false, failed = false;
-    std::exception_ptr asm_err;
-    std::thread assembler([&] {
-      try {
-        for (;;) {
-          Built bt;
-          {
-            std::unique_lock<std::mutex> lk(mu);
-            cv.wait(lk, [&] { return !queue.empty() || closing; });
-            if (queue.empty()) break;
-            bt = std::move(queue.front());
-            queue.pop_front();
-          }
-          cv.notify_all();
-          for (std::size_t i = 0; i < bt.m.size(); ++i)
-            as.add_leaf(bt.m[i], bt.nodes[i], bt.leaves[i], std::move(bt.blocks[i]), std::move(bt.tmps[i]), bt.halves[i]);
-        }
-        bool f;
-        {
-          std::lock_guard<std::mutex> lk(mu);
-          f = failed;
-        }
-        if (!f) as.finish();
-      } catch (...) {
-        std::lock_guard<std::mutex> lk(mu);
-        asm_err = std::current_exception();
-        failed = true;
-      }
-      cv.notify_all();
-    });
-    auto stop_assembler = [&] {
-      {
-        std::lock_guard<std::mutex> lk(mu);
-        closing = true;
-      }
-      cv.notify_all();
-      assembler.join();
-    };
-    try {
-      std::vector<Rec> batch;
-      std::vector<std::size_t> starts;
-      std::uint64_t consumed = 0;
-      auto process = [&] {
-        const std::size_t nl = starts.size();
-        starts.push_back(batch.size());
-        Built bt;
-        bt.m.resize(nl);
-        bt.nodes.resize(nl);
-        bt.leaves.resize(nl);
-        bt.blocks.resize(nl);
-        bt.tmps.resize(nl);
-        bt.halves.resize(nl);
-        auto one = [&](std::size_t i) {
-          const std::size_t b = starts[i], e = starts[i + 1];
-          std::vector<std::uint32_t> tri(e - b);
-          std::vector<float> xyz(9 * (e - b));
-          for (std::size_t k = b; k < e; ++k) {
-            tri[k - b] = batch[k].t;
-            for (int c = 0; c < 3; ++c) std::memcpy(&xyz[9 * (k - b) + 3 * std::size_t(c)], vf + 3 * std::size_t(batch[k].v[c]), 12);
-          }
-          bt.blocks[i].resize(e - b);
-          bt.m[i] = batch[b].m;
-          const Octcode code = octcode_make(L, batch[b].m);
-          build_leaf(ctx, code, e - b, tri.data(), xyz.data(), &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
-                     &bt.tmps[i], &bt.halves[i]);
-        };
-        if (threads <= 1 || nl < 2) {
-          for (std::size_t i = 0; i < nl; ++i) one(i);
-        } else {
-          arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-              for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
-            });
-          });
-        }
-        {
-          std::unique_lock<std::mutex> lk(mu);
-          cv.wait(lk, [&] { return queue.size() < 1 || failed; });
-          if (failed) return;
-          queue.push_back(std::move(bt));
-        }
-        cv.notify_all();
-        consumed += batch.size();
-        batch.clear();
-        starts.clear();
-        check();
-        progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
-      };
-      Rec r;
-      while (next(&r)) {
-        if (batch.empty() || batch.back().m != r.m) {
-          if (batch.size() >= batch_cap) {
-            process();
-            if (failed) break;
-          }
-          starts.push_back(batch.size());
-        }
-        batch.push_back(r);
-      }
-      if (!batch.empty() && !failed) process();
-      std::vector<Rec>().swap(run);
-    } catch (...) {
-      {
-        std::lock_guard<std::mutex> lk(mu);
-        failed = true;
-        queue.clear();
-      }
-      stop_assembler();
-      throw;
-    }
-    stop_assembler();
-    if (asm_err) std::rethrow_exception(asm_err);
-  }
+  merge_and_assemble(src, ctx, arena, opt, avail, R, sorted, as);
   R.seconds_merge_build = since(t0);
   // The runs are no longer needed.
   for (const std::string& p : run_files.paths) ::unlink(p.c_str());
