@@ -10,9 +10,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "ebp_cache.hpp"
-#include "ebp_ooc.hpp"
-#include "ebp_store.hpp"
+#include "methods/ebp_octree/store/page_cache.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
 #include "fuzz_contract.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -20,8 +20,10 @@
 #include <filesystem>
 #include <vector>
 
-#include "ebp_store.hpp"
-#include "ebp_verify.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
 #include "fuzz_contract.hpp"
 
 using namespace bvhbench;

@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -67,6 +69,50 @@ void AtomicOutputFile::commit() {
     const std::string why = std::strerror(!ok_ ? errno_ : !closed ? close_errno : errno);
     std::remove(tmp_.c_str());
     throw std::runtime_error(path_ + ": cannot write: " + why);
+  }
+}
+
+void AtomicOutputFile::write_at(std::uint64_t offset, const void* data, std::size_t n) {
+  auto fail = [&] { throw std::runtime_error(path_ + ": cannot write: " + std::strerror(errno)); };
+  if (std::fflush(f_) != 0) fail();
+  if (offset > std::uint64_t(std::numeric_limits<off_t>::max()) || n > std::numeric_limits<off_t>::max() - offset) {
+    errno = EFBIG;
+    fail();
+  }
+  const int fd = fileno(f_);
+  const auto* p = static_cast<const unsigned char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::pwrite(fd, p, n, off_t(offset));
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) fail();
+    if (w == 0) {  // no progress: a full disk
+      errno = ENOSPC;
+      fail();
+    }
+    p += w;
+    n -= std::size_t(w);
+    offset += std::uint64_t(w);
+  }
+}
+
+void AtomicOutputFile::resize(std::uint64_t size) {
+  if (std::fflush(f_) != 0 || size > std::uint64_t(std::numeric_limits<off_t>::max()) ||
+      ::ftruncate(fileno(f_), off_t(size)) != 0)
+    throw std::runtime_error(path_ + ": cannot write: " + std::strerror(errno));
+}
+
+void AtomicOutputFile::commit_durable() {
+  if (ok_ && (std::fflush(f_) != 0 || ::fsync(fileno(f_)) != 0)) {
+    ok_ = false;
+    errno_ = errno;
+  }
+  commit();
+  const auto slash = path_.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path_.substr(0, slash);
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
   }
 }
 

@@ -34,6 +34,17 @@ class AtomicOutputFile {
   /// Flushes, closes and renames the temporary to PATH. Throws if any write failed.
   void commit();
 
+  // For files written out of order (the EBP-Octree's `.ebp` stores: pages first, the header
+  // that points at them last) and that must survive a crash once they have their name.
+  /// Writes `n` bytes at byte `offset` of the file (after any sequential writes still buffered),
+  /// whatever the short transfers and EINTR; offset() is not moved. Throws the class's error.
+  void write_at(std::uint64_t offset, const void* data, std::size_t n);
+  /// Makes the file exactly `size` bytes long (cut, or extended with zeros). Throws likewise.
+  void resize(std::uint64_t size);
+  /// commit() with durability: the file's bytes reach the disk (fsync) before the rename, and the
+  /// rename itself (fsync of the directory, best effort) after it.
+  void commit_durable();
+
  private:
   std::string path_, tmp_;
   std::FILE* f_ = nullptr;

@@ -1,7 +1,7 @@
 #pragma once
 /// What the two harness adapters of the EBP-Octree (in memory: ebp_method.cpp; out of core:
 /// ebp_cli.cpp) share: turning the library's answer into the harness's.
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/core/query.hpp"
 #include "harness/core/method.hpp"
 
 namespace bvhbench {

@@ -1,6 +1,6 @@
-// The ebp_octree method: the harness adapter over the EBP-Octree core (ebp_octree.hpp), its
-// registration, and the `bvhbench ebp ...` command group (`stats` now; the out-of-core store
-// adds `build`, `info` and `verify` under the same group).
+// The ebp_octree method: the in-memory harness adapter over the EBP-Octree core (core/query.hpp),
+// its parameters, and its registration, which attaches the out-of-core variant (ooc_method.hpp)
+// and the `bvhbench ebp` commands (commands.hpp).
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -12,18 +12,18 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "ebp_adapter.hpp"
-#include "ebp_octree.hpp"
+#include "methods/ebp_octree/ebp_method.hpp"
+
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
-#include "harness/io/mesh_io.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/progress.hpp"
+#include "methods/ebp_octree/commands.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/ebp_adapter.hpp"
+#include "methods/ebp_octree/ooc_method.hpp"
 
 namespace bvhbench {
-std::unique_ptr<Method> make_ebp_ooc_method(const Params& p);  // ebp_cli.cpp
-void add_ebp_store_commands(CLI::App& ebp_cmd);             // ebp_cli.cpp
-namespace {
 
 std::vector<ParamSpec> ebp_params() {
   return {
@@ -34,7 +34,7 @@ std::vector<ParamSpec> ebp_params() {
        "degrees: face normals closer than this share one bounding plane", {}, 0.5, 90},
       {"coherent", ParamType::boolean, "false",
        "path coherence: seed distance with the previous closest triangle, reuse the previous leaf", {}},
-      // out of core (ebp_cli.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
+      // out of core (ooc_method.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
       {"store", ParamType::text, "", "out of core: answer from this .ebp store through a page cache", {}},
       {"cache_mb", ParamType::integer, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
       {"cold", ParamType::boolean, "false", "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
@@ -62,7 +62,8 @@ ebp::Octree build_tree(const Mesh& mesh, const ebp::BuildParams& bp, Progress* e
     if (own) own->finish();
     return t;
   } catch (const std::invalid_argument& e) {
-    throw InputError(mesh.path + ": " + e.what());
+    // A mesh made in memory has no path: then the message is the method's alone.
+    throw InputError(mesh.path.empty() ? std::string(e.what()) : mesh.path + ": " + e.what());
   }
 }
 
@@ -106,6 +107,8 @@ nlohmann::json stats_json(const ebp::Octree& t) {
   return j;
 }
 
+namespace {
+
 class EbpOctreeMethod final : public Method {
  public:
   explicit EbpOctreeMethod(const Params& p) : params_(p), coherent_(p.get_bool("coherent")) {}
@@ -145,67 +148,6 @@ class EbpOctreeMethod final : public Method {
   std::optional<ebp::Query> query_;
 };
 
-void add_stats_command(CLI::App& ebp_cmd) {
-  struct Opts {
-    std::string mesh;
-    std::vector<std::string> params;
-    bool json = false;
-    int threads = 1;
-  };
-  auto o = std::make_shared<Opts>();
-  auto* cmd = ebp_cmd.add_subcommand("stats", "Build the EBP-Octree on a mesh and print its figures");
-  cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
-  cmd->add_option("--param", o->params, "Build parameter key=value (repeatable): leaf_factor, max_planes, cluster_angle");
-  cmd->add_option("--threads", o->threads, "Build threads")->check(CLI::Range(1, 1024));
-  cmd->add_flag("--json", o->json, "Machine-readable output");
-  cmd->callback([o] {
-    std::map<std::string, std::string> given;
-    for (const std::string& kv : o->params) {
-      const auto eq = kv.find('=');
-      if (eq == std::string::npos || eq == 0) throw InputError("--param " + kv + ": expected key=value");
-      if (given.count(kv.substr(0, eq))) throw InputError("--param " + kv.substr(0, eq) + " given twice");
-      given[kv.substr(0, eq)] = kv.substr(eq + 1);
-    }
-    const Params p = Params::resolve("ebp_octree", ebp_params(), given);
-    Progress load("loading " + o->mesh, 1.0, !o->json);
-    const Mesh mesh = load_mesh(o->mesh);
-    load.finish();
-    const ebp::Octree t = build_tree(mesh, build_params(p, o->threads), nullptr);
-    nlohmann::json j = stats_json(t);
-    j["mesh"] = {{"path", mesh.path}, {"sha256", mesh.sha256}, {"triangles", mesh.num_triangles()}};
-    j["params"] = p.values();
-    j["threads"] = o->threads;
-    if (o->json) {
-      std::cout << j.dump(2) << "\n";
-      return;
-    }
-    const ebp::Stats& s = t.stats;
-    std::printf("EBP-Octree of %s (%zu triangles)\n", mesh.path.c_str(), mesh.num_triangles());
-    std::printf("  parameters        %s\n", p.non_default_string().empty() ? "defaults" : p.non_default_string().c_str());
-    std::printf("  levels            %d (leaf level %d; leaf cell %.6g = %.2f x average edge %.6g)\n", s.leaf_level + 1,
-                s.leaf_level, s.leaf_size, s.leaf_size / s.average_edge, s.average_edge);
-    std::printf("  nodes             %zu: %zu grey inner, %zu grey leaves, %zu white, %zu black\n", s.nodes, s.inner,
-                s.leaves, s.white, s.black);
-    std::printf("  nodes per level  ");
-    for (std::size_t n : s.nodes_per_level) std::printf(" %zu", n);
-    std::printf("\n  leaf configs      %zu convex, %zu concave, %zu special\n", s.convex, s.concave, s.special);
-    std::printf("  planes            %zu; mean %.2f per grey node (%.2f leaf, %.2f inner), max %zu\n", s.planes,
-                j["planes"]["per_grey_node_mean"].get<double>(), j["planes"]["per_leaf_mean"].get<double>(),
-                j["planes"]["per_inner_mean"].get<double>(), s.max_planes_per_node);
-    std::printf("  triangle refs     %zu (%.2f per triangle; %.1f per leaf, max %zu)\n", s.triangle_refs,
-                j["triangle_refs"]["per_triangle"].get<double>(), j["triangle_refs"]["per_leaf_mean"].get<double>(),
-                s.max_refs_per_leaf);
-    std::printf("  memory            %zu bytes, %.1f bytes per triangle (%zu of derived boxes)\n", t.bytes() + t.derived_bytes(),
-                j["bytes_per_triangle"].get<double>(), t.derived_bytes());
-    std::printf("  tightness         bounding volume / cell box: %.3f leaves, %.3f inner nodes (exact polytope volumes)\n",
-                j["tightness"]["leaves"].get<double>(), j["tightness"]["inner"].get<double>());
-    std::printf("  colouring         %zu winding fallbacks, %zu degenerate edges, %zu leaves without reference\n",
-                s.colour_fallbacks, s.degenerate_edges, s.invalid_refs);
-    std::printf("  build             %.3f s (distribute %.3f, leaves %.3f, inner %.3f, colour %.3f), %d thread(s)\n",
-                s.build_seconds, s.seconds_distribute, s.seconds_leaves, s.seconds_inner, s.seconds_colour, o->threads);
-  });
-}
-
 }  // namespace
 }  // namespace bvhbench
 
@@ -220,15 +162,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
-    if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core: ebp_cli.cpp
+    if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core
     return std::make_unique<EbpOctreeMethod>(p);
   };
   r.add(std::move(m));
-  // `bvhbench ebp <sub>`: one command group; later issues add subcommands in add_*_command.
-  r.add_command({"ebp", [](CLI::App& app) {
-                   auto* ebp_cmd = app.add_subcommand("ebp", "EBP-Octree tools (stats; build/info/verify for the on-disk store)");
-                   ebp_cmd->require_subcommand(1);
-                   add_stats_command(*ebp_cmd);
-                   add_ebp_store_commands(*ebp_cmd);  // build, info, verify: ebp_cli.cpp
-                 }});
+  r.add_command({"ebp", add_ebp_commands});
 }

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ebp_verify.hpp"
+#include "methods/ebp_octree/store/verify.hpp"
 #include "harness/core/query_set.hpp"
 #include "harness/io/npy.hpp"
 #include "harness/io/npz.hpp"

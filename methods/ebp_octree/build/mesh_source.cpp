@@ -1,0 +1,187 @@
+// The mesh sources of the external build (mesh_source.hpp): in memory, a mesh file through the
+// harness's mesh reader, and the prefetching scan.
+#include "methods/ebp_octree/build/mesh_source.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "harness/io/mesh_reader.hpp"
+
+namespace ebp {
+
+namespace {
+
+class MemorySource final : public TriangleSource {
+ public:
+  MemorySource(const std::vector<Vec3d>& v, const std::vector<std::array<std::uint32_t, 3>>& t) : v_(v), t_(t) {
+    vf_.reserve(3 * v_.size());
+    for (const Vec3d& p : v_) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
+      for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k]));
+    }
+  }
+  const float* float_vertices() const override { return vf_.data(); }
+  std::uint64_t num_triangles() const override { return t_.size(); }
+  std::uint64_t num_vertices() const override { return v_.size(); }
+  void scan(const Chunk& f) override {
+    std::vector<std::uint32_t> idx;
+    std::vector<float> xyz;
+    for (std::size_t first = 0; first < t_.size(); first += kScanChunk) {
+      const std::size_t n = std::min(kScanChunk, t_.size() - first);
+      idx.resize(3 * n);
+      xyz.resize(9 * n);
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t vi = t_[first + i][k];
+          if (vi >= v_.size()) throw std::invalid_argument("ebp_octree: vertex index out of range");
+          idx[3 * i + k] = vi;
+          for (int a = 0; a < 3; ++a) xyz[9 * i + 3 * k + a] = float(v_[vi][a]);
+        }
+      f(first, n, idx.data(), xyz.data());
+    }
+  }
+  std::size_t resident_bytes() const override { return vf_.capacity() * sizeof(float); }
+
+ private:
+  const std::vector<Vec3d>& v_;
+  std::vector<float> vf_;
+  const std::vector<std::array<std::uint32_t, 3>>& t_;
+};
+
+/// A mesh file in any format the harness reads, through its mesh reader (mesh_reader.hpp): the
+/// vertices read once into float (held), the triangles re-read from the file at every scan.
+class FileSource final : public TriangleSource {
+ public:
+  explicit FileSource(const std::string& path) : reader_(bvhbench::MeshReader::open(path)) {
+    vf_.reserve(3 * std::size_t(reader_->num_vertices()));  // the header's count, checked against the file size
+    reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) vf_.push_back(float(v[i][k]));
+    });
+    vf_.shrink_to_fit();
+  }
+  std::uint64_t num_triangles() const override { return reader_->num_triangles(); }
+  std::uint64_t num_vertices() const override { return reader_->num_vertices(); }
+  std::string sha256() const override { return reader_->sha256(); }
+  const float* float_vertices() const override { return vf_.data(); }
+  /// The float vertices, the reader's buffers (an STL's weld table among them) and one chunk.
+  std::size_t resident_bytes() const override {
+    return vf_.capacity() * sizeof(float) + reader_->resident_bytes() +
+           kScanChunk * (3 * sizeof(std::uint32_t) + 9 * sizeof(float));
+  }
+  bool streaming() const override { return true; }
+
+  void scan(const Chunk& f) override {
+    std::vector<std::uint32_t> idx;
+    std::vector<float> xyz;
+    reader_->read_triangles([&](std::uint64_t first, const bvhbench::Triangle* t, std::size_t n) {
+      idx.resize(3 * n);
+      xyz.resize(9 * n);
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t v = t[i][k];
+          idx[3 * i + std::size_t(k)] = v;
+          std::memcpy(&xyz[9 * i + 3 * std::size_t(k)], &vf_[3 * std::size_t(v)], 3 * sizeof(float));
+        }
+      f(first, n, idx.data(), xyz.data());
+    });
+  }
+
+ private:
+  std::unique_ptr<bvhbench::MeshReader> reader_;
+  std::vector<float> vf_;
+};
+
+}  // namespace
+
+std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& vertices,
+                                                   const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  return std::make_unique<MemorySource>(vertices, triangles);
+}
+
+std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path) { return std::make_unique<FileSource>(path); }
+
+void prefetch_scan(TriangleSource& src, const TriangleSource::Chunk& fn) {
+  struct Buf {
+    std::uint64_t first = 0;
+    std::size_t n = 0;
+    std::vector<std::uint32_t> idx;
+    std::vector<float> xyz;
+  };
+  struct Abort {};
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<Buf> q;
+  std::vector<Buf> spare;
+  bool done = false, stop = false;
+  std::exception_ptr err;
+  std::thread prod([&] {
+    try {
+      src.scan([&](std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz) {
+        Buf b;
+        {
+          std::unique_lock<std::mutex> lk(mu);
+          cv.wait(lk, [&] { return q.size() < 3 || stop; });
+          if (stop) throw Abort{};
+          if (!spare.empty()) {
+            b = std::move(spare.back());
+            spare.pop_back();
+          }
+        }
+        b.first = first;
+        b.n = n;
+        b.idx.assign(idx, idx + 3 * n);
+        b.xyz.assign(xyz, xyz + 9 * n);
+        {
+          std::lock_guard<std::mutex> lk(mu);
+          q.push_back(std::move(b));
+        }
+        cv.notify_all();
+      });
+    } catch (const Abort&) {
+    } catch (...) {
+      err = std::current_exception();
+    }
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      done = true;
+    }
+    cv.notify_all();
+  });
+  try {
+    for (;;) {
+      Buf b;
+      {
+        std::unique_lock<std::mutex> lk(mu);
+        cv.wait(lk, [&] { return !q.empty() || done; });
+        if (q.empty()) break;
+        b = std::move(q.front());
+        q.pop_front();
+      }
+      cv.notify_all();
+      fn(b.first, b.n, b.idx.data(), b.xyz.data());
+      std::lock_guard<std::mutex> lk(mu);
+      spare.push_back(std::move(b));
+    }
+  } catch (...) {
+    {
+      std::lock_guard<std::mutex> lk(mu);
+      stop = true;
+    }
+    cv.notify_all();
+    prod.join();
+    throw;
+  }
+  prod.join();
+  if (err) std::rethrow_exception(err);
+}
+
+}  // namespace ebp

@@ -1,0 +1,59 @@
+#pragma once
+/// The mesh as the external build reads it: streamed in chunks of triangles (vertex indices and
+/// float vertices), from a mesh file through the harness's reader or from arrays in memory, and
+/// the scan in a producer thread that overlaps parsing with the work on each chunk.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "harness/core/geometry.hpp"
+
+namespace ebp {
+
+using bvhbench::Vec3d;
+
+/// Triangles per chunk of a scan (at most).
+inline constexpr std::size_t kScanChunk = 1 << 16;
+
+/// The mesh, streamed: triangles in input order with their vertex indices and float vertices.
+class TriangleSource {
+ public:
+  virtual ~TriangleSource() = default;
+  virtual std::uint64_t num_triangles() const = 0;
+  virtual std::uint64_t num_vertices() const = 0;
+  /// f(first triangle, n, idx[3n], xyz[9n]) over all triangles in order, in chunks. Throws
+  /// std::invalid_argument / bvhbench::InputError on bad data (index out of range, non-finite).
+  using Chunk = std::function<void(std::uint64_t first, std::size_t n, const std::uint32_t* idx, const float* xyz)>;
+  virtual void scan(const Chunk& f) = 0;
+  /// sha256 of the file's bytes (after one complete scan); "" for meshes made in code.
+  virtual std::string sha256() const { return ""; }
+  /// The vertices as float (x, y, z per vertex, 3 × num_vertices()), held by the source: the
+  /// sorted records carry vertex indices and the leaves read their coordinates here.
+  virtual const float* float_vertices() const = 0;
+  /// Memory the source holds (its float vertices, buffers, an STL's weld table).
+  virtual std::size_t resident_bytes() const = 0;
+  /// Whether the source streams a file (false: a mesh held in memory).
+  virtual bool streaming() const { return false; }
+};
+
+/// Over vertices/triangles in memory (no copy: coordinates rounded to float on the fly).
+std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& vertices,
+                                                   const std::vector<std::array<std::uint32_t, 3>>& triangles);
+/// A mesh file in any format bvhbench reads (PLY with faces or strips, OBJ, STL, OFF), streamed
+/// through the harness's mesh reader (mesh_reader.hpp): the vertices read once and held as float
+/// (12 B each), the triangles re-read from the file at every scan. What the source holds besides
+/// (the reader's buffers; an STL's weld table, ≈ 20–28 B per vertex) is in resident_bytes().
+/// Throws InputError for a file the reader refuses (its vertices are read here; the faces'
+/// problems are found at the first scan).
+std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path);
+
+/// src.scan() in a producer thread (parsing the file), the chunks handed to `fn` in the calling
+/// thread through a queue of at most 3 chunks. An exception on either side stops both and is
+/// rethrown here.
+void prefetch_scan(TriangleSource& src, const TriangleSource::Chunk& fn);
+
+}  // namespace ebp

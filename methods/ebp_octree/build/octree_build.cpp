@@ -1,0 +1,374 @@
+// The in-memory EBP-Octree builder, Octree::build. Steps (DESIGN.md explains the why), each in its
+// file of build/ shared with the external build (build_parts.hpp): frame.cpp, leaf_build.cpp,
+// inner_build.cpp, colouring.cpp:
+//   1. float geometry, bounding cube (enlarged, with exactly representable cell boundaries),
+//      leaf level from the average edge length;
+//   2. distribution: every triangle to every leaf cell it touches (bbox-restricted
+//      rasterisation confirmed by the conservative separating-axis test), (morton, tri) pairs
+//      sorted;
+//   3. the node set: grey nodes (holding geometry) down to the leaf level, and the empty octants
+//      of grey inner nodes as empty leaves (maximal empty cells: no merge step is needed);
+//   4. leaves: triangle blocks, bounding planes (clustered face normals, offset to the support of
+//      triangle ∩ cell), configuration (convex / concave / special), reference point;
+//   5. inner nodes bottom-up: planes chosen among the children's, offset to the support of the
+//      children's bounding volumes (vertices of cell box ∩ planes);
+//   6. colouring: winding numbers of reference points and empty nodes by exact signed segment
+//      crossings between adjacent cells, joined in a union-find with potentials, seeded by the
+//      outside of the root (w = 0).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
+#include "methods/ebp_octree/build/build_parts.hpp"
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+
+namespace ebp {
+
+using namespace detail;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Runs f(i) for i in [0, n), in parallel when threads > 1.
+template <class F>
+void par_for(int threads, std::size_t n, F&& f) {
+  if (threads <= 1 || n < 64) {
+    for (std::size_t i = 0; i < n; ++i) f(i);
+    return;
+  }
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+    });
+  });
+}
+
+struct Pair {
+  std::uint64_t m;  // leaf Morton code
+  std::uint32_t t;  // triangle
+  bool operator<(const Pair& o) const { return m < o.m || (m == o.m && t < o.t); }
+};
+
+}  // namespace
+
+Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array<std::uint32_t, 3>>& tin,
+                     const BuildParams& prm, const std::function<void(double)>& progress) {
+  const auto t_start = Clock::now();
+  auto report = [&](double f) { if (progress) progress(f); };
+  if (tin.empty()) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
+  if (tin.size() >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
+  const int threads = std::max(1, prm.threads);
+
+  Octree T;
+  T.num_triangles = std::uint32_t(tin.size());
+  const std::size_t nt = tin.size();
+
+  // ---- 1. geometry in float (the structure's geometry), cube, leaf level ----
+  std::vector<Vec3d> V(vin.size());
+  for (std::size_t i = 0; i < vin.size(); ++i) {
+    const Vec3d& v = vin[i];
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+      throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
+    V[i] = round_to_float(v);
+  }
+  FrameAccumulator acc;
+  for (const auto& t : tin) {
+    for (int k = 0; k < 3; ++k)
+      if (t[k] >= V.size()) throw std::invalid_argument("ebp_octree: vertex index out of range");
+    acc.add(V[t[0]], V[t[1]], V[t[2]]);
+  }
+  const Frame F = compute_frame(acc, prm);
+  const BuildContext ctx(F, prm);
+  T.root_lo = F.root_lo;
+  T.root_centre = F.root_centre;
+  T.root_size = F.root_size;
+  T.leaf_level = F.leaf_level;
+  const int L = F.leaf_level;
+  const double cs = ctx.cs;
+  Stats& S = T.stats;
+  S.leaf_level = L;
+  S.root_size = T.root_size;
+  S.leaf_size = cs;
+  S.average_edge = F.average_edge;
+  S.triangles = nt;
+  report(0.02);
+
+  // ---- 2. distribution ----
+  auto t0 = Clock::now();
+  std::vector<Pair> pairs;
+  {
+    auto distribute = [&](std::size_t t, std::vector<Pair>& out, std::vector<std::uint64_t>& ms) {
+      ms.clear();
+      distribute_triangle(ctx, V[tin[t][0]], V[tin[t][1]], V[tin[t][2]], ms);
+      for (std::uint64_t m : ms) out.push_back({m, std::uint32_t(t)});
+    };
+    if (threads <= 1) {
+      pairs.reserve(nt * 2);
+      std::vector<std::uint64_t> ms;
+      for (std::size_t t = 0; t < nt; ++t) distribute(t, pairs, ms);
+      std::sort(pairs.begin(), pairs.end());
+    } else {
+      tbb::enumerable_thread_specific<std::vector<Pair>> local;
+      tbb::enumerable_thread_specific<std::vector<std::uint64_t>> local_ms;
+      tbb::task_arena arena(threads);
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+          auto& out = local.local();
+          auto& ms = local_ms.local();
+          for (std::size_t t = r.begin(); t != r.end(); ++t) distribute(t, out, ms);
+        });
+        std::size_t total = 0;
+        for (auto& v : local) total += v.size();
+        pairs.reserve(total);
+        for (auto& v : local) pairs.insert(pairs.end(), v.begin(), v.end());
+        tbb::parallel_sort(pairs.begin(), pairs.end());
+      });
+    }
+  }
+  S.seconds_distribute = since(t0);
+  S.triangle_refs = pairs.size();
+  report(0.25);
+
+  // ---- 3. the node set ----
+  // Leaves: unique Morton codes, with their pair ranges.
+  std::vector<std::uint64_t> leaf_m;
+  std::vector<std::uint32_t> leaf_begin;
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (i == 0 || pairs[i].m != pairs[i - 1].m) {
+      leaf_m.push_back(pairs[i].m);
+      leaf_begin.push_back(std::uint32_t(i));
+    }
+  leaf_begin.push_back(std::uint32_t(pairs.size()));
+  const std::size_t nleaves = leaf_m.size();
+  // Grey prefixes per level.
+  std::vector<std::vector<std::uint64_t>> grey(L + 1);
+  grey[L] = leaf_m;
+  for (int l = L - 1; l >= 0; --l) {
+    for (std::uint64_t mm : grey[l + 1]) {
+      const std::uint64_t p = mm >> 3;
+      if (grey[l].empty() || grey[l].back() != p) grey[l].push_back(p);
+    }
+  }
+  std::vector<Octcode> codes;
+  for (int l = 0; l <= L; ++l)
+    for (std::uint64_t g : grey[l]) codes.push_back(octcode_make(l, g));
+  for (int l = 0; l < L; ++l)
+    for (std::uint64_t g : grey[l])
+      for (std::uint64_t o = 0; o < 8; ++o) {
+        const std::uint64_t c = (g << 3) | o;
+        if (!std::binary_search(grey[l + 1].begin(), grey[l + 1].end(), c)) codes.push_back(octcode_make(l + 1, c));
+      }
+  std::sort(codes.begin(), codes.end());
+  if (codes.size() >= 0xffffffffull) throw std::runtime_error("ebp_octree: too many nodes");
+  const std::size_t N = codes.size();
+  T.nodes.resize(N);
+  auto index_of = [&](Octcode c) {
+    return std::uint32_t(std::lower_bound(codes.begin(), codes.end(), c) - codes.begin());
+  };
+  std::size_t ninner = 0;
+  for (int l = 0; l < L; ++l) ninner += grey[l].size();
+  T.children.resize(ninner * 8);
+  T.leaves.resize(nleaves);
+  std::vector<std::uint32_t> leaf_node(nleaves);
+  {
+    std::uint32_t next_child = 0, next_leaf = 0;
+    for (std::size_t i = 0; i < N; ++i) {
+      Node& nd = T.nodes[i];
+      nd.code = codes[i];
+      nd.plane_begin = 0;
+      nd.plane_count = 0;
+      nd.config = LeafConfig::special;
+      nd.next = index_of(octcode_subtree_end(codes[i]));
+      const int l = octcode_level(codes[i]);
+      const std::uint64_t mm = octcode_morton(codes[i]);
+      const bool is_grey = std::binary_search(grey[l].begin(), grey[l].end(), mm);
+      if (!is_grey) {
+        nd.kind = NodeKind::white;  // coloured in step 6
+        nd.index = 0;
+      } else if (l < L) {
+        nd.kind = NodeKind::inner;
+        nd.index = next_child;
+        for (int o = 0; o < 8; ++o) T.children[next_child + o] = index_of(octcode_child(codes[i], o));
+        next_child += 8;
+      } else {
+        nd.kind = NodeKind::leaf;
+        nd.index = next_leaf;  // leaves are met in Morton order = leaf_m order
+        leaf_node[next_leaf] = std::uint32_t(i);
+        ++next_leaf;
+      }
+    }
+  }
+  report(0.3);
+
+  // ---- 4. leaves ----
+  t0 = Clock::now();
+  std::vector<NodeTmp> tmp(N);
+  std::vector<LeafHalves> halves(nleaves);
+  T.tris.resize(pairs.size());
+  par_for(threads, nleaves, [&](std::size_t li) {
+    const std::uint32_t ni = leaf_node[li];
+    Node& nd = T.nodes[ni];
+    Leaf& lf = T.leaves[li];
+    const std::uint32_t b = leaf_begin[li], e = leaf_begin[li + 1];
+    std::vector<std::uint32_t> tri(e - b);
+    std::vector<float> xyz(9 * std::size_t(e - b));
+    for (std::uint32_t k = b; k < e; ++k) {
+      const std::uint32_t t = pairs[k].t;
+      tri[k - b] = t;
+      for (int q = 0; q < 3; ++q)
+        for (int ax = 0; ax < 3; ++ax) xyz[9 * std::size_t(k - b) + 3 * q + ax] = float(V[tin[t][q]][ax]);
+    }
+    const std::uint32_t next = nd.next, index = nd.index;
+    build_leaf(ctx, nd.code, e - b, tri.data(), xyz.data(), &nd, &lf, &T.tris[b], &tmp[ni], &halves[li]);
+    nd.next = next;
+    nd.index = index;
+    lf.tri_begin = b;
+  });
+  S.seconds_leaves = since(t0);
+  report(0.6);
+
+  // ---- 5. inner nodes, bottom-up ----
+  t0 = Clock::now();
+  {
+    std::vector<std::vector<std::uint32_t>> inner_at(L);
+    for (std::size_t i = 0; i < N; ++i)
+      if (T.nodes[i].kind == NodeKind::inner) inner_at[octcode_level(T.nodes[i].code)].push_back(std::uint32_t(i));
+    for (int l = L - 1; l >= 0; --l) {
+      const auto& list = inner_at[l];
+      par_for(threads, list.size(), [&](std::size_t q) {
+        const std::uint32_t ni = list[q];
+        const Node& nd = T.nodes[ni];
+        NodeTmp* ch[8];
+        for (int o = 0; o < 8; ++o) {
+          const std::uint32_t ci = T.children[nd.index + o];
+          const NodeKind k = T.nodes[ci].kind;
+          ch[o] = (k == NodeKind::inner || k == NodeKind::leaf) ? &tmp[ci] : nullptr;
+        }
+        build_inner(ctx, nd.code, ch, &tmp[ni]);
+      });
+    }
+  }
+  // Plane pool in node order.
+  for (std::size_t i = 0; i < N; ++i) {
+    Node& nd = T.nodes[i];
+    nd.plane_begin = std::uint32_t(T.planes.size());
+    nd.plane_count = std::uint16_t(tmp[i].planes.size());
+    T.planes.insert(T.planes.end(), tmp[i].planes.begin(), tmp[i].planes.end());
+    S.max_planes_per_node = std::max<std::size_t>(S.max_planes_per_node, tmp[i].planes.size());
+    if (nd.kind == NodeKind::leaf) {
+      S.leaf_planes += tmp[i].planes.size();
+      S.leaf_volume += tmp[i].volume;
+      S.leaf_box_volume += tmp[i].box_volume;
+    } else if (nd.kind == NodeKind::inner) {
+      S.inner_planes += tmp[i].planes.size();
+      S.inner_volume += tmp[i].volume;
+      S.inner_box_volume += tmp[i].box_volume;
+    }
+  }
+  std::vector<NodeTmp>().swap(tmp);
+  S.seconds_inner = since(t0);
+  report(0.8);
+
+  // ---- 6. colouring ----
+  t0 = Clock::now();
+  {
+    Skeleton sk;
+    sk.leaf_level = L;
+    sk.code.resize(N);
+    sk.kind.resize(N);
+    sk.index.resize(N);
+    for (std::size_t i = 0; i < N; ++i) {
+      sk.code[i] = T.nodes[i].code;
+      sk.kind[i] = T.nodes[i].kind;
+      sk.index[i] = T.nodes[i].index;
+    }
+    sk.children = T.children;
+    sk.leaf_node = leaf_node;
+    sk.leaf_ref.resize(nleaves);
+    sk.leaf_ref_valid.resize(nleaves);
+    for (std::size_t li = 0; li < nleaves; ++li) {
+      for (int k = 0; k < 3; ++k) sk.leaf_ref[li][k] = T.leaves[li].ref[k];
+      sk.leaf_ref_valid[li] = T.leaves[li].ref_valid;
+    }
+    sk.leaf_halves = std::move(halves);
+    auto winding_at = [&](const std::vector<Vec3d>& pts) {
+      std::vector<int> out;
+      for (const Vec3d& p : pts) {
+        double w = 0;
+        for (const auto& t : tin) w += bvhbench::triangle_winding(p, V[t[0]], V[t[1]], V[t[2]]);
+        out.push_back(int(std::lround(w)));
+      }
+      return out;
+    };
+    const Colouring C = colour(F, sk, winding_at);
+    for (std::uint32_t i : C.black) T.nodes[i].kind = NodeKind::black;
+    for (std::size_t li = 0; li < nleaves; ++li) T.leaves[li].ref_winding = C.ref_winding[li];
+    S.colour_fallbacks = C.colour_fallbacks;
+    S.degenerate_edges = C.degenerate_edges;
+    S.invalid_refs = C.invalid_refs;
+  }
+  S.seconds_colour = since(t0);
+
+  // ---- stats ----
+  S.nodes = N;
+  S.leaves = nleaves;
+  S.inner = ninner;
+  S.planes = T.planes.size();
+  S.nodes_per_level.assign(L + 1, 0);
+  for (const Node& nd : T.nodes) {
+    S.nodes_per_level[octcode_level(nd.code)]++;
+    if (nd.kind == NodeKind::white) ++S.white;
+    if (nd.kind == NodeKind::black) ++S.black;
+    if (nd.kind == NodeKind::leaf) {
+      if (nd.config == LeafConfig::convex) ++S.convex;
+      else if (nd.config == LeafConfig::concave) ++S.concave;
+      else ++S.special;
+    }
+  }
+  for (const Leaf& lf : T.leaves) S.max_refs_per_leaf = std::max<std::size_t>(S.max_refs_per_leaf, lf.tri_count);
+  // ---- closedness (by vertex index): every undirected edge is used as often in each direction.
+  // Then the winding number is a function of the point, so a coherent query may count crossings
+  // from the previous point instead of the leaf's reference (same integer, exactly).
+  if (vin.size() < (std::size_t(1) << 31)) {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(3 * nt);
+    for (const auto& t : tin)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t u = t[k], v = t[(k + 1) % 3];
+        if (u == v) continue;
+        keys.push_back(u < v ? (u << 33 | v << 1 | 0u) : (v << 33 | u << 1 | 1u));
+      }
+    std::sort(keys.begin(), keys.end());
+    bool closed = true;
+    for (std::size_t i = 0; i < keys.size() && closed;) {
+      std::size_t j = i;
+      long bal = 0;
+      while (j < keys.size() && (keys[j] >> 1) == (keys[i] >> 1)) bal += (keys[j++] & 1u) ? -1 : 1;
+      closed = bal == 0;
+      i = j;
+    }
+    T.closed = closed;
+  }
+  compute_leaf_blocks(T);  // derived boxes (leaf_blocks.hpp)
+  S.build_seconds = since(t_start);
+  // (Hook: the tree is complete here.)
+  report(1.0);
+  return T;
+}
+
+}  // namespace ebp

@@ -1,0 +1,137 @@
+#pragma once
+/// The EBP-Octree (Extended Bounding-Planes Octree; Aguilera, Melero, Feito, CAD 77, 2016):
+/// an octree over the model's bounding cube whose nodes are bounded by a subset of planes parallel
+/// to the model's faces, with white (outside) / black (inside) empty nodes and per-leaf
+/// configurations. See DESIGN.md beside this file for what is the paper's and what is ours.
+///
+/// This header is the in-memory structure (its builder: build/octree_build.cpp; its queries:
+/// query.hpp). It depends on nothing of the harness but geometry.hpp, so that an out-of-core
+/// store can reuse it.
+///
+/// Layout (all plain data, indices instead of pointers, so that the arrays can be written to a
+/// file and mapped back as they are):
+///   nodes    : every node, sorted by octcode = pre-order; a subtree is a contiguous range
+///              [i, nodes[i].next).
+///   children : 8 node indices per inner node (octant order x | y<<1 | z<<2).
+///   planes   : the plane pool; a node's bounding planes are planes[plane_begin, +plane_count),
+///              n.(x - root_centre) <= d, n unit (float), d rounded up so containment survives.
+///   leaves   : one record per grey leaf (reference point and its colour, triangle block).
+///   tris     : per-leaf triangle blocks, 64 bytes (one cache line) per reference: inline float
+///              coordinates, the face plane in the leaf's frame and the input triangle index.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <utility>
+#include <string>
+#include <vector>
+
+#include "harness/core/geometry.hpp"
+#include "methods/ebp_octree/core/build_params.hpp"
+#include "methods/ebp_octree/core/octcode.hpp"
+#include "methods/ebp_octree/core/stats.hpp"
+
+namespace ebp {
+
+using bvhbench::Box3d;
+using bvhbench::Vec3d;
+using bvhbench::Vec3f;
+
+enum class NodeKind : std::uint8_t { white = 0, black = 1, inner = 2, leaf = 3 };
+enum class LeafConfig : std::uint8_t { convex = 0, concave = 1, special = 2 };
+const char* to_string(NodeKind k);
+const char* to_string(LeafConfig c);
+
+struct Node {
+  Octcode code;               ///< octcode (level in the low 5 bits)
+  std::uint32_t plane_begin;  ///< first bounding plane in the pool
+  std::uint16_t plane_count;  ///< number of bounding planes (the cell box bounds it too)
+  NodeKind kind;
+  LeafConfig config;          ///< leaves only
+  std::uint32_t index;        ///< inner: first of 8 entries in `children`; leaf: index in `leaves`
+  std::uint32_t next;         ///< one past the last node of this subtree (pre-order skip)
+};
+static_assert(sizeof(Node) == 24, "Node is 24 bytes of plain data");
+
+struct Plane {
+  float n[3];  ///< unit outward normal
+  float d;     ///< offset, in the root's frame (x - root_centre): n.x <= d holds on the volume
+};
+static_assert(sizeof(Plane) == 16, "Plane is 16 bytes");
+
+/// One triangle reference in a leaf block. Coordinates are the input's, rounded to float (the
+/// structure's geometry); all exact predicates run on exactly these values.
+struct LeafTri {
+  float a[3], b[3], c[3];
+  float n[3];    ///< unit face normal (float); zero for slivers whose normal is ill-conditioned
+  float d;       ///< face plane n.(x - leaf centre) = d
+  std::uint32_t tri;    ///< index of the triangle in the input mesh
+  std::uint32_t flags;  ///< kRefPositive | kDegenerate
+  float pad;
+};
+static_assert(sizeof(LeafTri) == 64, "LeafTri is one cache line");
+inline constexpr std::uint32_t kRefPositive = 1;  ///< the leaf's reference point is on the outer side
+inline constexpr std::uint32_t kDegenerate = 2;   ///< zero area (exactly collinear): no parity role
+
+struct Leaf {
+  float centre[3];           ///< cell centre (float; the frame of the LeafTri planes)
+  float ref[3];              ///< reference point, strictly inside the cell, off every face plane
+  float eps;                 ///< bound on the float error of LeafTri plane evaluations in this leaf
+  std::uint32_t tri_begin;   ///< first LeafTri
+  std::uint32_t tri_count;
+  std::int16_t ref_winding;  ///< winding number of the reference point (inside iff >= 1)
+  std::uint8_t ref_valid;    ///< 0 if no reference point off every plane was found
+  std::uint8_t pad;
+};
+static_assert(sizeof(Leaf) == 40, "Leaf is 40 bytes");
+
+/// A float axis-aligned box (derived data, leaf_blocks.hpp): of a group of kBlockTris consecutive
+/// LeafTris of a leaf, or of a node's geometry within its cell.
+struct BlockBox {
+  float lo[3], hi[3];
+};
+static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
+inline constexpr std::uint32_t kBlockTris = 8;
+
+class Octree {
+ public:
+  /// Builds over `vertices` (#V) and `triangles` (#F, indices into vertices). Triangles may be
+  /// degenerate or repeated; #F >= 1. Throws std::invalid_argument on an index out of range or a
+  /// non-finite coordinate. `progress` (optional) receives fractions in [0, 1].
+  static Octree build(const std::vector<Vec3d>& vertices,
+                      const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                      const BuildParams& params,
+                      const std::function<void(double)>& progress = nullptr);
+
+  // --- the structure (read-only after build) ---
+  Vec3d root_lo, root_centre;
+  double root_size = 0;  ///< edge of the root cube
+  int leaf_level = 0;
+  std::uint32_t num_triangles = 0;  ///< in the input mesh
+  /// Every undirected edge (by vertex index) is used equally often in both directions: the winding
+  /// number is then path-independent, which coherent inside queries rely on (false: they don't).
+  bool closed = false;
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> children;
+  std::vector<Plane> planes;
+  std::vector<Leaf> leaves;
+  std::vector<LeafTri> tris;
+  Stats stats;
+  // --- derived from the above (leaf_blocks.cpp), by build and by every decoder; not stored ---
+  std::vector<BlockBox> blocks;           ///< box of each group of kBlockTris LeafTris of a leaf
+  std::vector<std::uint32_t> leaf_block;  ///< per leaf: its first block (ceil(tri_count / 8) blocks)
+  std::vector<BlockBox> node_box;         ///< per node: box of its triangles within its cell
+  std::size_t derived_bytes() const {
+    return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox);
+  }
+
+  std::size_t bytes() const;
+  double cell_size(int level) const { return root_size / double(std::uint64_t(1) << level); }
+  /// The cell box of a code.
+  void cell_box(Octcode c, Vec3d* lo, Vec3d* hi) const;
+  /// Index of the node whose cell holds leaf-grid cell (x, y, z) (a leaf or an empty node).
+  std::uint32_t locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
+};
+
+}  // namespace ebp

@@ -1,0 +1,104 @@
+#pragma once
+/// The queries over a built Octree (query.cpp): the
+/// per-thread query state, its work counters, the distance answer and the running best that the
+/// out-of-core query carries from page to page.
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include "methods/ebp_octree/core/octree.hpp"
+
+namespace ebp {
+
+/// Work counters of the queries (deterministic).
+struct QueryCounters {
+  std::uint64_t nodes_visited = 0, planes_tested = 0, triangles_tested = 0;
+  std::uint64_t hit_white = 0, hit_black = 0, hit_convex = 0, hit_concave = 0, hit_special = 0;
+  std::uint64_t exact_fallbacks = 0;  ///< parity retried with another reference point
+};
+
+struct DistanceAnswer {
+  double distance = 0;  ///< signed, negative inside
+  Vec3d closest, normal;
+  std::int64_t triangle = -1;
+};
+
+/// The running best of a distance query, possibly over several trees (the out-of-core pages):
+/// the lexicographic minimum of (squared distance, key), key = input triangle index.
+struct DistanceBest {
+  double best2 = std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity();
+  std::uint64_t key = UINT64_MAX;
+  Vec3d closest;
+  std::uint32_t k = UINT32_MAX;     ///< LeafTri index of the best, if the last call found it in its tree
+  std::uint32_t leaf = UINT32_MAX;  ///< and the leaf it was found in
+  std::uint32_t node = UINT32_MAX;  ///< and that leaf's node, if known
+};
+
+/// Where and how Query::distance_bound starts.
+struct DistanceStart {
+  const std::uint32_t* key_of = nullptr;  ///< LeafTri::tri -> key (increasing); null: key = tri
+  std::uint32_t seed_tri = UINT32_MAX;    ///< a LeafTri index tested first (a valid upper bound)
+  std::uint32_t seed_leaf = UINT32_MAX;   ///< a leaf scanned before the descent
+  std::uint32_t seed_node = UINT32_MAX;   ///< its node, if known (its planes then bound the blocks)
+  std::uint32_t node = 0;                 ///< the subtree searched (its whole geometry)
+};
+
+/// Query state over a built Octree: per-query stamps, the coherent path state, counters.
+/// One per thread. No allocation per query.
+class Query {
+ public:
+  Query(const Octree& tree, bool coherent);
+  bool inside(const Vec3d& p);
+  DistanceAnswer distance(const Vec3d& p);
+  /// Unsigned distance only (no inside test); fills closest/normal/triangle.
+  DistanceAnswer unsigned_distance(const Vec3d& p);
+  /// Branch and bound over the subtree `s.node`, starting from the running best `b` (an upper
+  /// bound, ties kept: only what is strictly worse than it is pruned). `b` becomes the minimum of
+  /// itself and the subtree's triangles, by (squared distance, key); b.k / b.leaf are set if one
+  /// of this tree's triangles is the new best, UINT32_MAX otherwise. With the initial bound
+  /// >= the true distance, the answer is the one without it, bit for bit.
+  void distance_bound(const Vec3d& p, DistanceBest& b, const DistanceStart& s);
+  void reset_path();
+  QueryCounters counters;
+
+ private:
+  class DistanceSearch;  // one distance_bound call, step by step (query_distance.cpp)
+  std::uint32_t locate(const Vec3d& p, bool* outside_root);
+  bool classify_leaf(const Vec3d& p, const Leaf& leaf, std::uint32_t leaf_index, std::uint32_t node);
+  const Octree& t_;
+  bool coherent_;
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t query_id_ = 0;
+  // coherent inside (closed meshes): the last point of the path whose winding number is known
+  // exactly (see classify_leaf and DESIGN.md), and the bounding boxes of the triangles of the
+  // last few leaves used, as float arrays (a cache of derived data; answers do not depend on it).
+  struct LeafBoxes {
+    std::uint32_t leaf = UINT32_MAX;  ///< leaf index, or none
+    std::uint32_t n4 = 0;             ///< slots: each octant group padded to 4 with empty boxes
+    std::uint32_t group[9] = {};      ///< the slots of octant g are [group[g], group[g + 1])
+    float glo[3][8], ghi[3][8];       ///< each group's bounding box
+    std::vector<float> b;             ///< lo x[n4], lo y, lo z, hi x, hi y, hi z
+    std::vector<std::uint32_t> k;     ///< the slot's triangle, offset in the leaf's block
+  };
+  bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
+  const LeafBoxes& leaf_boxes(std::uint32_t leaf_index);
+  bool prev_ok_ = false;
+  Vec3d prev_p_;
+  int prev_w_ = 0;
+  std::vector<LeafBoxes> leaf_boxes_;  // direct-mapped by leaf index
+  std::vector<float> tmp_box_;
+  // coherent state
+  std::uint32_t last_node_ = UINT32_MAX;
+  std::uint32_t last_cell_[3] = {0, 0, 0};
+  int last_level_ = 0;
+  std::uint32_t last_tri_ = UINT32_MAX;  // LeafTri index of the previous closest triangle
+  std::uint32_t last_leaf_ = UINT32_MAX;  // and the leaf where it was found
+  std::uint32_t last_leaf_node_ = UINT32_MAX;  // and that leaf's node
+  // distance: leaves already scanned by this query, scratch for the block order
+  std::vector<std::uint32_t> leaf_stamp_;
+  std::vector<std::pair<double, std::uint32_t>> order_;
+};
+
+}  // namespace ebp

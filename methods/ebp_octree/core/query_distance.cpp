@@ -1,0 +1,443 @@
+// Distance (Query::distance, unsigned_distance, distance_bound): branch and bound over the tree
+// with the bounding planes as lower bounds (DESIGN.md, "Distance"). One distance_bound call is a
+// DistanceSearch, in the steps the algorithm takes:
+//   the coherent start   the previous closest triangle and its leaf, so that the bound is tight
+//                        before the descent;
+//   the narrowed start   the deepest node on p's path whose cell holds the ball (p, best + tol);
+//   the descent          nodes popped nearest first, pruned by node_bound (cell box, geometry
+//                        box, planes, plane and bounding sphere together);
+//   the leaf scan        a leaf's blocks, nearest first, pruned by their boxes and the leaf's
+//                        most separating plane; in each block the triangle tests (face plane,
+//                        box, plane and bounding sphere) before the exact closest point.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <utility>
+
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+
+namespace ebp {
+
+namespace {
+
+struct StackItem {
+  Vec3d lo;
+  double bound;
+  std::uint32_t node;
+  int level;
+};
+
+/// Squared distance from p to a float box (exact box; the rounding of this computation is
+/// covered by the query's `tol`).
+inline double box_d2(const BlockBox& b, const Vec3d& p) {
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double v = std::max({double(b.lo[a]) - p[a], 0.0, p[a] - double(b.hi[a])});
+    d2 += v * v;
+  }
+  return d2;
+}
+
+/// A leaf's most separating bounding plane at p: h its lower bound of the distance, n its
+/// normal; h <= 0 for none.
+struct PlaneHint {
+  double h = 0, n[3] = {0, 0, 0};
+};
+
+}  // namespace
+
+/// The state of one distance_bound call: p, the running best, and the bounds derived from them.
+class Query::DistanceSearch {
+ public:
+  DistanceSearch(Query& q, const Vec3d& p, DistanceBest& B, const DistanceStart& s)
+      : p(p), B(B), s(s), t_(q.t_), counters(q.counters), stamp_(q.stamp_), leaf_stamp_(q.leaf_stamp_),
+        order_(q.order_), qid(q.query_id_), tris(t_.tris.data()), key_of(s.key_of), leaves(t_.leaves.data()),
+        blocks(t_.blocks.data()), planes(t_.planes.data()), nodes(t_.nodes.data()), nbox(t_.node_box.data()) {
+    // Box bounds (blocks, nodes) are compared with `tol` added to the best distance: it covers
+    // the rounding of the box distance and of the exact-closest-point computation (a few ulps of
+    // the coordinates), so a box is only pruned when everything in it is strictly worse than the
+    // best.
+    tol = 1e-12 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
+                   std::max({std::fabs(t_.root_lo.x), std::fabs(t_.root_lo.y), std::fabs(t_.root_lo.z)}) +
+                   t_.root_size);
+    if (B.best < std::numeric_limits<double>::infinity()) lim2 = (B.best + tol) * (B.best + tol);
+    // Plane bounds are evaluated in float in the root's frame; `slack` covers their rounding
+    // (normals unit to 1e-7, float products), so that every bound stays a lower bound.
+    const Vec3d pr = p - t_.root_centre;
+    fx = float(pr.x);
+    fy = float(pr.y);
+    fz = float(pr.z);
+    slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t_.root_size);
+  }
+
+  /// The coherent start: the previous closest triangle, then its whole leaf (with its plane hint
+  /// when its node is known), so that the bound is tight before the descent (answers do not
+  /// depend on the order).
+  void coherent_start() {
+    if (s.seed_tri < t_.tris.size() && s.seed_leaf < t_.leaves.size()) {
+      const bool known = s.seed_node < t_.nodes.size() && nodes[s.seed_node].kind == NodeKind::leaf &&
+                         nodes[s.seed_node].index == s.seed_leaf;
+      scan_node = known ? s.seed_node : UINT32_MAX;
+      test_triangle(s.seed_tri, s.seed_leaf);
+      scan_leaf(s.seed_leaf, known ? leaf_hint(nodes[s.seed_node]) : PlaneHint{});
+    } else if (s.seed_tri < t_.tris.size()) {
+      scan_node = UINT32_MAX;
+      test_triangle(s.seed_tri, UINT32_MAX);
+    }
+  }
+
+  /// The descent: from the narrowed start, nodes popped nearest first, children ordered by bound.
+  void descend() {
+    StackItem stack[8 * (kMaxLevel + 2)];
+    int sp = 0;
+    stack[sp++] = narrowed_start();
+    while (sp > 0) {
+      const StackItem it = stack[--sp];
+      if (it.bound > B.best) continue;
+      const Node& nd = nodes[it.node];
+      ++counters.nodes_visited;
+      if (nd.kind == NodeKind::leaf) {
+        if (leaf_stamp_[nd.index] == qid) continue;
+        scan_node = it.node;
+        scan_leaf(nd.index, leaf_hint(nd));
+        continue;
+      }
+      if (nd.kind != NodeKind::inner) continue;
+      // Inner: children ordered by bound, nearest popped first.
+      const int cl = it.level + 1;
+      const double csz = t_.cell_size(cl);
+      StackItem kids[8];
+      int nk = 0;
+      for (int o = 0; o < 8; ++o) {
+        const std::uint32_t ci = t_.children[nd.index + std::uint32_t(o)];
+        const Node& cn = nodes[ci];
+        if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
+        const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+        const double b = node_bound(ci, lo, csz);
+        if (b > B.best) continue;
+        kids[nk++] = {lo, b, ci, cl};
+      }
+      // insertion sort, descending bound
+      for (int a = 1; a < nk; ++a) {
+        StackItem x = kids[a];
+        int b = a - 1;
+        while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+        kids[b + 1] = x;
+      }
+      for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+    }
+  }
+
+ private:
+  /// The exact closest point of LeafTri k (found in `leaf`), once per input triangle and query;
+  /// the best becomes it if it is smaller by (squared distance, key).
+  void test_triangle(std::uint32_t k, std::uint32_t leaf) {
+    const LeafTri& t = tris[k];
+    if (stamp_[t.tri] == qid) return;
+    stamp_[t.tri] = qid;
+    ++counters.triangles_tested;
+    const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
+    const double d2 = squared_norm(q - p);
+    const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
+    if (d2 < B.best2 || (d2 == B.best2 && key < B.key)) {
+      B.best2 = d2;
+      B.best = std::sqrt(d2);
+      B.key = key;
+      B.k = k;
+      B.leaf = leaf;
+      B.node = scan_node;
+      B.closest = q;
+      lim2 = (B.best + tol) * (B.best + tol);
+    }
+  }
+
+  /// A leaf's scan: its blocks' boxes first, nearest first, stopping at the first block whose box
+  /// is strictly farther than the best (they are sorted); in a surviving block, the triangle
+  /// tests, then the exact closest point. A leaf is scanned once per query (everything a scan
+  /// skipped was strictly worse than the best then, and the best only decreases).
+  void scan_leaf(std::uint32_t li, const PlaneHint& hn) {
+    if (leaf_stamp_[li] == qid) return;
+    leaf_stamp_[li] = qid;
+    const Leaf& lf = leaves[li];
+    const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+                pz = float(p.z - double(lf.centre[2]));
+    // lf.eps bounds the float error of a face-plane value for points near the leaf; the error
+    // grows with p's distance from the leaf centre (the rounding of px, py, pz and of the
+    // products), so far points get the extra term, or they could lose their closest triangle.
+    const double eps_p = double(lf.eps) +
+                         1e-6 * (double(std::fabs(px)) + double(std::fabs(py)) + double(std::fabs(pz)));
+    const std::uint32_t m = order_blocks(li, lf, hn);
+    std::pair<double, std::uint32_t>* ord = order_.data();
+    // The surviving blocks' triangles are usually cold (random points): ask for all of them now,
+    // so that the misses overlap instead of being paid one block after the other.
+    for (std::uint32_t i = 0; i < m && i < 4; ++i) {
+      const char* a = reinterpret_cast<const char*>(tris + lf.tri_begin + ord[i].second * kBlockTris);
+      for (std::uint32_t l = 0; l < kBlockTris; ++l) __builtin_prefetch(a + 64 * l);
+    }
+    for (std::uint32_t i = 0; i < m; ++i) {
+      if (ord[i].first > lim2) break;
+      const std::uint32_t k0 = lf.tri_begin + ord[i].second * kBlockTris;
+      const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
+      counters.planes_tested += k1 - k0;
+      for (std::uint32_t k = k0; k < k1; ++k) {
+        if (triangle_pruned(tris[k], px, py, pz, eps_p)) continue;
+        test_triangle(k, li);
+      }
+    }
+  }
+
+  /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
+  /// ascending (bound, block): a deterministic order. Returns how many.
+  std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn) {
+    const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+    const BlockBox* bb = blocks + t_.leaf_block[li];
+    std::pair<double, std::uint32_t>* ord = order_.data();
+    std::uint32_t m = 0;
+    counters.planes_tested += nb;
+    for (std::uint32_t j = 0; j < nb; ++j) {
+      double d2 = box_d2(bb[j], p);
+      if (d2 > lim2) continue;
+      if (hn.h > 0) {
+        // The leaf's plane and the block box's bounding sphere (as node_bound does for nodes):
+        // a bound of the distance to the block's triangles within this leaf's cell, which is
+        // all this leaf stands for.
+        const BlockBox& x = bb[j];
+        const double ex = double(x.hi[0]) - double(x.lo[0]), ey = double(x.hi[1]) - double(x.lo[1]),
+                     ez = double(x.hi[2]) - double(x.lo[2]);
+        const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez) * (1.0 + 1e-12);
+        const double qx = p.x - 0.5 * (double(x.lo[0]) + double(x.hi[0])), qy = p.y - 0.5 * (double(x.lo[1]) + double(x.hi[1])),
+                     qz = p.z - 0.5 * (double(x.lo[2]) + double(x.hi[2]));
+        const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * hn.n[0] + qy * hn.n[1] + qz * hn.n[2];
+        const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6, as for triangles
+        if (tan2 > rho * rho) {
+          const double tl = std::sqrt(tan2) - rho;
+          const double cb = std::sqrt(hn.h * hn.h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol);
+          if (cb > 0) d2 = std::max(d2, cb * cb);
+          if (d2 > lim2) continue;
+        }
+      }
+      // insertion, ascending (distance, block): a deterministic order
+      std::uint32_t i = m++;
+      while (i > 0 && ord[i - 1].first > d2) { ord[i] = ord[i - 1]; --i; }
+      ord[i] = {d2, j};
+    }
+    return m;
+  }
+
+  /// The triangle tests before the exact closest point: true if every point of `t` is strictly
+  /// farther than the best. (px, py, pz): p in the leaf's frame, eps_p the bound of the error of
+  /// a face-plane value there.
+  bool triangle_pruned(const LeafTri& t, float px, float py, float pz, double eps_p) const {
+    // Face plane first (one dot product), then the box one axis at a time (early exit).
+    const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    const double h = double(std::fabs(sv)) - eps_p;
+    if (h > B.best) return true;
+    double bd2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = double(std::min({t.a[a], t.b[a], t.c[a]})), hi = double(std::max({t.a[a], t.b[a], t.c[a]}));
+      const double v = std::max({lo - p[a], 0.0, p[a] - hi});
+      bd2 += v * v;
+      if (bd2 * (1.0 - 1e-12) > B.best2) return true;
+    }
+    // Face plane and the vertices' bounding sphere together (as for nodes, see node_bound):
+    // |p - y|^2 >= h^2 + (|tangential part of p - c| - rho)^2 for every y of the triangle. Far
+    // from a flat or gently curved patch, the face planes of all its triangles are at about the
+    // distance; this bound grows away from the foot of p.
+    if (h > 0) {
+      const double cx = (double(t.a[0]) + double(t.b[0]) + double(t.c[0])) * (1.0 / 3.0),
+                   cy = (double(t.a[1]) + double(t.b[1]) + double(t.c[1])) * (1.0 / 3.0),
+                   cz = (double(t.a[2]) + double(t.b[2]) + double(t.c[2])) * (1.0 / 3.0);
+      auto r2 = [&](const float* v) {
+        const double x = double(v[0]) - cx, y = double(v[1]) - cy, z = double(v[2]) - cz;
+        return x * x + y * y + z * z;
+      };
+      const double rho = std::sqrt(std::max({r2(t.a), r2(t.b), r2(t.c)})) * (1.0 + 1e-12);
+      const double nx = double(t.n[0]), ny = double(t.n[1]), nz = double(t.n[2]);
+      const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
+      const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
+      // |n|^2 >= 1 - 1e-6 (a unit vector rounded to float, or zero: then h < 0), so
+      // q2 - qn^2 (1 + 1e-6) <= the tangential part squared: no division needed.
+      const double tan2 = q2 - qn * qn * (1.0 + 1e-6);
+      if (tan2 > rho * rho) {
+        const double tl = std::sqrt(tan2) - rho;
+        const double lim = B.best + 1e-6 * (std::fabs(qx) + std::fabs(qy) + std::fabs(qz) + rho) + tol;
+        if (h * h + tl * tl > lim * lim) return true;
+      }
+    }
+    return false;
+  }
+
+  /// A leaf's most separating plane at p, for the block bounds of its scan.
+  PlaneHint leaf_hint(const Node& nd) {
+    PlaneHint hn;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
+      const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
+      if (v > m) {
+        m = v;
+        hn.n[0] = double(pl[k].n[0]); hn.n[1] = double(pl[k].n[1]); hn.n[2] = double(pl[k].n[2]);
+      }
+    }
+    counters.planes_tested += nd.plane_count;
+    hn.h = double(m) - slack;
+    return hn;
+  }
+
+  /// A node's lower bound: its cell box, then the box of its geometry, then its planes; each
+  /// stage only when the previous ones do not already prune it.
+  double node_bound(std::uint32_t ni, const Vec3d& lo, double size) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+      d2 += v * v;
+    }
+    double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    if (b > B.best) return b;  // pruned by the box alone: the planes could only raise the bound
+    const double g2 = box_d2(nbox[ni], p);
+    if (g2 > d2) {
+      b = std::max(b, std::sqrt(g2) - tol);
+      if (b > B.best) return b;
+    }
+    const Node& nd = nodes[ni];
+    float m = -std::numeric_limits<float>::infinity();
+    std::uint32_t km = 0;
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k) {
+      const float v = pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d;
+      if (v > m) { m = v; km = k; }
+    }
+    counters.planes_tested += nd.plane_count;
+    const double h = double(m) - slack;
+    b = std::max(b, h);
+    if (b > B.best || h <= 0) return b;
+    // The most separating plane and the node box's bounding sphere (centre c, radius rho)
+    // together: every point y of the geometry has n.(p - y) >= h and |y - c| <= rho, so its
+    // component of p - y across n is >= |tangential part of (p - c)| - rho, and
+    // |p - y|^2 >= h^2 + that^2. On a flat or gently curved patch seen from afar (every plane
+    // and box bound about the distance) this is the bound that grows away from the foot of p.
+    // `h` already carries the plane's slack; the rest (float normal not exactly unit, the
+    // rounding of this double computation) is covered by 1e-6 (|p - c| + rho) + tol.
+    const BlockBox& bx = nbox[ni];
+    const double cx = 0.5 * (double(bx.lo[0]) + double(bx.hi[0])), cy = 0.5 * (double(bx.lo[1]) + double(bx.hi[1])),
+                 cz = 0.5 * (double(bx.lo[2]) + double(bx.hi[2]));
+    const double ex = double(bx.hi[0]) - double(bx.lo[0]), ey = double(bx.hi[1]) - double(bx.lo[1]),
+                 ez = double(bx.hi[2]) - double(bx.lo[2]);
+    if (!(ex >= 0 && ey >= 0 && ez >= 0) || !std::isfinite(ex + ey + ez)) return b;  // empty / no box
+    const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double nx = double(pl[km].n[0]), ny = double(pl[km].n[1]), nz = double(pl[km].n[2]);
+    const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
+    const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
+    const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6: a lower bound, no division
+    if (!(tan2 > rho * rho)) return b;
+    const double tl = std::sqrt(tan2) - rho;
+    return std::max(b, std::sqrt(h * h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol));
+  }
+
+  /// The node the descent starts from: s.node, or, with a finite best (a seed, or the bound
+  /// passed in), the deepest node on p's path whose cell holds the ball (p, best + tol) strictly
+  /// inside: all geometry outside that cell is strictly farther than the best, so nothing it
+  /// could win is lost.
+  StackItem narrowed_start() {
+    std::uint32_t start = s.node;
+    Vec3d lo = t_.root_lo, hi;
+    double size = t_.root_size;
+    int level = 0;
+    if (start != 0) {
+      t_.cell_box(nodes[start].code, &lo, &hi);
+      level = octcode_level(nodes[start].code);
+      size = t_.cell_size(level);
+    }
+    if (B.best < std::numeric_limits<double>::infinity()) {
+      const double r = B.best + tol;
+      auto holds = [&](const Vec3d& c, double sz) {
+        return p.x - c.x > r && p.y - c.y > r && p.z - c.z > r && c.x + sz - p.x > r && c.y + sz - p.y > r &&
+               c.z + sz - p.z > r;
+      };
+      if (holds(lo, size)) {
+        while (nodes[start].kind == NodeKind::inner) {
+          const double csz = t_.cell_size(level + 1);
+          const int o = (p.x >= lo.x + csz ? 1 : 0) | (p.y >= lo.y + csz ? 2 : 0) | (p.z >= lo.z + csz ? 4 : 0);
+          const Vec3d clo{lo.x + ((o & 1) ? csz : 0.0), lo.y + ((o & 2) ? csz : 0.0), lo.z + ((o & 4) ? csz : 0.0)};
+          const std::uint32_t ci = t_.children[nodes[start].index + std::uint32_t(o)];
+          const NodeKind ck = nodes[ci].kind;
+          if ((ck != NodeKind::inner && ck != NodeKind::leaf) || !holds(clo, csz)) break;
+          ++counters.nodes_visited;
+          start = ci;
+          lo = clo;
+          size = csz;
+          ++level;
+        }
+      }
+    }
+    return {lo, node_bound(start, lo, size), start, level};
+  }
+
+  const Vec3d& p;
+  DistanceBest& B;
+  const DistanceStart& s;
+  const Octree& t_;
+  QueryCounters& counters;
+  std::vector<std::uint32_t>& stamp_;
+  std::vector<std::uint32_t>& leaf_stamp_;
+  std::vector<std::pair<double, std::uint32_t>>& order_;
+  const std::uint32_t qid;
+  const LeafTri* const tris;
+  const std::uint32_t* const key_of;
+  const Leaf* const leaves;
+  const BlockBox* const blocks;
+  const Plane* const planes;
+  const Node* const nodes;
+  const BlockBox* const nbox;
+  double tol = 0;
+  double lim2 = std::numeric_limits<double>::infinity();  ///< (best + tol)^2
+  float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
+  double slack = 0;
+  std::uint32_t scan_node = UINT32_MAX;  ///< the node of the leaf being scanned, if known
+};
+
+DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
+  DistanceBest b;
+  DistanceStart s;
+  if (coherent_) {
+    s.seed_tri = last_tri_;
+    s.seed_leaf = last_leaf_;
+    s.seed_node = last_leaf_node_;
+  }
+  distance_bound(p, b, s);
+  DistanceAnswer r;
+  if (b.k == UINT32_MAX) return r;  // cannot happen: the mesh has a triangle
+  const LeafTri& t = t_.tris[b.k];
+  r.distance = b.best;
+  r.closest = b.closest;
+  r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
+  r.triangle = std::int64_t(t.tri);
+  if (coherent_) {
+    last_tri_ = b.k;
+    last_leaf_ = b.leaf;
+    last_leaf_node_ = b.node;
+  }
+  return r;
+}
+
+void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart& s) {
+  if (++query_id_ == 0) {  // wrapped: forget every stamp
+    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    std::fill(leaf_stamp_.begin(), leaf_stamp_.end(), 0u);
+    query_id_ = 1;
+  }
+  B.k = B.leaf = B.node = UINT32_MAX;
+  DistanceSearch search(*this, p, B, s);
+  search.coherent_start();
+  search.descend();
+}
+
+DistanceAnswer Query::distance(const Vec3d& p) {
+  DistanceAnswer r = unsigned_distance(p);
+  if (inside(p)) r.distance = -r.distance;
+  return r;
+}
+
+}  // namespace ebp

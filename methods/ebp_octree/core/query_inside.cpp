@@ -1,0 +1,486 @@
+// Exact point-in-solid (Query::inside): the leaf holding the point (Query::locate), its colour if empty, else
+// the winding number by signed segment crossings from the leaf's reference point (DESIGN.md,
+// "Inside"), or, on a coherent path over a closed mesh, from the previous point.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
+
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/core/reference_points.hpp"
+
+namespace ebp {
+
+namespace {
+/// The next float towards -inf (dir < 0) or +inf (dir > 0) of a finite float.
+inline float float_step(float f, int dir) {
+  if (f == 0.0f) return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
+  std::uint32_t u;
+  std::memcpy(&u, &f, 4);
+  u = ((f > 0) == (dir > 0)) ? u + 1 : u - 1;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+/// The largest float <= x and the smallest float >= x (x finite, within the float range).
+inline float float_down(double x) {
+  const float f = float(x);
+  return double(f) > x ? float_step(f, -1) : f;
+}
+inline float float_up(double x) {
+  const float f = float(x);
+  return double(f) < x ? float_step(f, 1) : f;
+}
+}  // namespace
+
+// Point location by octcode descent, with the coherent shortcut (the previous point's node when
+// p is in its cell). In this file so that the compiler can inline it into inside().
+std::uint32_t Query::locate(const Vec3d& p, bool* outside_root) {
+  const double inv = double(std::uint64_t(1) << t_.leaf_level) / t_.root_size;
+  const double G = double(std::uint64_t(1) << t_.leaf_level);
+  const double rx = (p.x - t_.root_lo.x) * inv, ry = (p.y - t_.root_lo.y) * inv, rz = (p.z - t_.root_lo.z) * inv;
+  if (!(rx >= 0 && ry >= 0 && rz >= 0 && rx <= G && ry <= G && rz <= G)) {
+    *outside_root = true;
+    return UINT32_MAX;
+  }
+  *outside_root = false;
+  const std::uint32_t gmax = (1u << t_.leaf_level) - 1;
+  const std::uint32_t x = std::min(std::uint32_t(rx), gmax), y = std::min(std::uint32_t(ry), gmax),
+                      z = std::min(std::uint32_t(rz), gmax);
+  if (coherent_ && last_node_ != UINT32_MAX) {
+    const int sh = t_.leaf_level - last_level_;
+    if ((x >> sh) == last_cell_[0] && (y >> sh) == last_cell_[1] && (z >> sh) == last_cell_[2]) {
+      ++counters.nodes_visited;
+      return last_node_;
+    }
+  }
+  std::uint32_t i = 0;
+  const Node* nodes = t_.nodes.data();
+  const std::uint32_t* ch = t_.children.data();
+  int level = 0;
+  ++counters.nodes_visited;
+  while (nodes[i].kind == NodeKind::inner) {
+    const int shift = t_.leaf_level - level - 1;
+    const std::uint32_t o = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+    i = ch[nodes[i].index + o];
+    ++level;
+    ++counters.nodes_visited;
+  }
+  if (coherent_) {
+    last_node_ = i;
+    last_level_ = level;
+    const int sh = t_.leaf_level - level;
+    last_cell_[0] = x >> sh;
+    last_cell_[1] = y >> sh;
+    last_cell_[2] = z >> sh;
+  }
+  return i;
+}
+
+bool Query::inside(const Vec3d& p) {
+  bool outside_root;
+  const std::uint32_t i = locate(p, &outside_root);
+  if (outside_root) {
+    ++counters.hit_white;
+    return false;
+  }
+  const Node& nd = t_.nodes[i];
+  switch (nd.kind) {
+    case NodeKind::white: ++counters.hit_white; return false;
+    case NodeKind::black: ++counters.hit_black; return true;
+    default: break;
+  }
+  switch (nd.config) {
+    case LeafConfig::convex: ++counters.hit_convex; break;
+    case LeafConfig::concave: ++counters.hit_concave; break;
+    default: ++counters.hit_special; break;
+  }
+  return classify_leaf(p, t_.leaves[nd.index], nd.index, i);
+}
+
+namespace {
+
+/// Winding-number change w(p) - w(q) along q -> p over the leaf's triangles. `q_side(k)` gives
+/// the exact side (+1 / -1, never 0) of q for triangle k. The float planes filter p's side; ties
+/// go to the exact predicate. Returns false when p is on a triangle (*on_surface) or the segment
+/// is degenerate (through an edge or a vertex).
+template <class QSide>
+bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
+                  QSide&& q_side, QueryCounters& cnt, int* delta, bool* on_surface) {
+  const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+              pz = float(p.z - double(lf.centre[2]));
+  const float eps = lf.eps;
+  // The segment's bounding box: a triangle whose box misses it cannot be crossed (exact
+  // comparisons of exact values, so this filter never changes an answer).
+  const double sx0 = std::min(p.x, q.x), sx1 = std::max(p.x, q.x), sy0 = std::min(p.y, q.y),
+               sy1 = std::max(p.y, q.y), sz0 = std::min(p.z, q.z), sz1 = std::max(p.z, q.z);
+  int w = 0;
+  cnt.planes_tested += n;
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const LeafTri& t = blk[k];
+    if (t.flags & kDegenerate) continue;
+    const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    const int sq = q_side(k);
+    int sp;
+    if (s > eps) sp = 1;
+    else if (s < -eps) sp = -1;
+    else sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+    if (sp == sq) continue;
+    ++cnt.triangles_tested;
+    if (double(std::max({t.a[0], t.b[0], t.c[0]})) < sx0 || double(std::min({t.a[0], t.b[0], t.c[0]})) > sx1 ||
+        double(std::max({t.a[1], t.b[1], t.c[1]})) < sy0 || double(std::min({t.a[1], t.b[1], t.c[1]})) > sy1 ||
+        double(std::max({t.a[2], t.b[2], t.c[2]})) < sz0 || double(std::min({t.a[2], t.b[2], t.c[2]})) > sz1)
+      continue;
+    switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
+      case Cross::none: break;
+      case Cross::proper: w += sq > 0 ? 1 : -1; break;  // q outer -> p inner: entering
+      case Cross::on_p: *on_surface = true; return false;
+      case Cross::degenerate: return false;
+    }
+  }
+  *delta = w;
+  return true;
+}
+
+/// leaf_winding from the leaf's reference point (its side of triangle k is the kRefPositive
+/// bit). Same decisions, in the same order, as leaf_winding with that q_side; the float plane
+/// values of four triangles at a time are computed with SSE in the same operation order as the
+/// scalar expression (no FMA on this target), so they are bit for bit the same, and only the
+/// triangles that the scalar loop would not skip at once (degenerate, or float side equal to the
+/// reference's) reach the scalar tail.
+bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
+                      QueryCounters& cnt, int* delta, bool* on_surface) {
+  const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
+              pz = float(p.z - double(lf.centre[2]));
+  const float eps = lf.eps;
+  const double sx0 = std::min(p.x, q.x), sx1 = std::max(p.x, q.x), sy0 = std::min(p.y, q.y),
+               sy1 = std::max(p.y, q.y), sz0 = std::min(p.z, q.z), sz1 = std::max(p.z, q.z);
+#if defined(__SSE2__)
+  // The segment's box rounded outwards to float (a float box that misses it misses the exact
+  // one); lane 3 of the triangle boxes below is not a coordinate and always passes.
+  const __m128 SLO = _mm_setr_ps(float_down(sx0), float_down(sy0), float_down(sz0), -std::numeric_limits<float>::infinity());
+  const __m128 SHI = _mm_setr_ps(float_up(sx1), float_up(sy1), float_up(sz1), std::numeric_limits<float>::infinity());
+#endif
+  int w = 0;
+  cnt.planes_tested += n;
+  // 1: go on, 0: stop (on the surface or degenerate segment). s: the float plane value.
+  auto one = [&](std::uint32_t k, float s) {
+    const LeafTri& t = blk[k];
+    if (t.flags & kDegenerate) return 1;
+    const int sq = (t.flags & kRefPositive) ? 1 : -1;
+    int sp;
+    if (s > eps) sp = 1;
+    else if (s < -eps) sp = -1;
+    else sp = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+    if (sp == sq) return 1;
+    ++cnt.triangles_tested;
+#if defined(__SSE2__)
+    static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, n) == 36,
+                  "a, b, c, n contiguous: 16-byte loads at a, b, c stay in the record");
+    const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
+    const __m128 lo = _mm_min_ps(_mm_min_ps(A, B), C), hi = _mm_max_ps(_mm_max_ps(A, B), C);
+    if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(hi, SLO), _mm_cmpgt_ps(lo, SHI))) != 0) return 1;
+#else
+    if (double(std::max({t.a[0], t.b[0], t.c[0]})) < sx0 || double(std::min({t.a[0], t.b[0], t.c[0]})) > sx1 ||
+        double(std::max({t.a[1], t.b[1], t.c[1]})) < sy0 || double(std::min({t.a[1], t.b[1], t.c[1]})) > sy1 ||
+        double(std::max({t.a[2], t.b[2], t.c[2]})) < sz0 || double(std::min({t.a[2], t.b[2], t.c[2]})) > sz1)
+      return 1;
+#endif
+    switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
+      case Cross::none: return 1;
+      case Cross::proper: w += sq > 0 ? 1 : -1; return 1;
+      case Cross::on_p: *on_surface = true; return 0;
+      case Cross::degenerate: return 0;
+    }
+    return 0;
+  };
+  std::uint32_t k = 0;
+#if defined(__SSE2__)
+  const __m128 PX = _mm_set1_ps(px), PY = _mm_set1_ps(py), PZ = _mm_set1_ps(pz);
+  const __m128 EP = _mm_set1_ps(eps), EN = _mm_set1_ps(-eps);
+  static_assert(offsetof(LeafTri, d) == offsetof(LeafTri, n) + 12, "plane n, d contiguous");
+  for (; k + 4 <= n; k += 4) {
+    __m128 r0 = _mm_loadu_ps(blk[k].n), r1 = _mm_loadu_ps(blk[k + 1].n), r2 = _mm_loadu_ps(blk[k + 2].n),
+           r3 = _mm_loadu_ps(blk[k + 3].n);
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // nx, ny, nz, d of the four
+    const __m128 s = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, PX), _mm_mul_ps(r1, PY)), _mm_mul_ps(r2, PZ)), r3);
+    const unsigned gt = unsigned(_mm_movemask_ps(_mm_cmpgt_ps(s, EP)));
+    const unsigned lt = unsigned(_mm_movemask_ps(_mm_cmplt_ps(s, EN)));
+    const __m128i fl = _mm_set_epi32(int(blk[k + 3].flags), int(blk[k + 2].flags), int(blk[k + 1].flags),
+                                     int(blk[k].flags));
+    const unsigned pos = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_slli_epi32(fl, 31))));  // kRefPositive
+    const unsigned deg = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_slli_epi32(fl, 30))));  // kDegenerate
+    alignas(16) float sv[4];
+    _mm_store_ps(sv, s);
+    for (unsigned todo = ~((gt & pos) | (lt & ~pos) | deg) & 15u; todo; todo &= todo - 1) {
+      const unsigned j = unsigned(__builtin_ctz(todo));
+      if (!one(k + j, sv[j])) return false;
+    }
+  }
+#endif
+  for (; k < n; ++k) {
+    const LeafTri& t = blk[k];
+    if (!one(k, t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d)) return false;
+  }
+  *delta = w;
+  return true;
+}
+
+}  // namespace
+
+// The bounding boxes of a leaf's triangles (float, exact: min/max of the float coordinates),
+// grouped by the octant of the leaf cell that holds their box centre, with each group's box; a
+// small direct-mapped cache. Degenerate triangles are left out (no role in crossings).
+const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
+  LeafBoxes& e = leaf_boxes_[li & (leaf_boxes_.size() - 1)];
+  if (e.leaf == li) return e;
+  const Leaf& lf = t_.leaves[li];
+  const std::uint32_t n = lf.tri_count;
+  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
+  std::uint32_t count[8] = {};
+  tmp_box_.resize(std::size_t(7) * n);  // lo x, y, z, hi x, y, z, octant (as float) per triangle
+  float* tb = tmp_box_.data();
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const LeafTri& t = blk[k];
+    float* r = tb + std::size_t(7) * k;
+    if (t.flags & kDegenerate) { r[6] = 8; continue; }
+    unsigned o = 0;
+    for (int a = 0; a < 3; ++a) {
+      r[a] = std::min({t.a[a], t.b[a], t.c[a]});
+      r[3 + a] = std::max({t.a[a], t.b[a], t.c[a]});
+      if (r[a] + r[3 + a] > 2.0f * lf.centre[a]) o |= 1u << a;
+    }
+    r[6] = float(o);
+    ++count[o];
+  }
+  std::uint32_t fill[8];
+  e.group[0] = 0;
+  for (int g = 0; g < 8; ++g) {
+    fill[g] = e.group[g];
+    e.group[g + 1] = e.group[g] + ((count[g] + 3) & ~3u);
+  }
+  const std::uint32_t n4 = e.group[8];
+  e.leaf = li;
+  e.n4 = n4;
+  e.b.resize(std::size_t(6) * n4);
+  e.k.resize(n4);  // (a padding slot's k is never read: its box is empty)
+  float* b = e.b.data();
+  for (int a = 0; a < 3; ++a)
+    for (int g = 0; g < 8; ++g) {
+      e.glo[a][g] = std::numeric_limits<float>::infinity();
+      e.ghi[a][g] = -std::numeric_limits<float>::infinity();
+    }
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const float* r = tb + std::size_t(7) * k;
+    if (r[6] == 8) continue;
+    const unsigned g = unsigned(r[6]);
+    const std::uint32_t j = fill[g]++;
+    e.k[j] = k;
+    for (int a = 0; a < 3; ++a) {
+      b[a * n4 + j] = r[a];
+      b[(3 + a) * n4 + j] = r[3 + a];
+      e.glo[a][g] = std::min(e.glo[a][g], r[a]);
+      e.ghi[a][g] = std::max(e.ghi[a][g], r[3 + a]);
+    }
+  }
+  for (int g = 0; g < 8; ++g)
+    for (std::uint32_t j = fill[g]; j < e.group[g + 1]; ++j)  // padding: empty boxes
+      for (int a = 0; a < 3; ++a) {
+        b[a * n4 + j] = std::numeric_limits<float>::infinity();
+        b[(3 + a) * n4 + j] = -std::numeric_limits<float>::infinity();
+      }
+  return e;
+}
+
+// Coherent inside on a closed mesh (the winding number is then a function of the point):
+// w(p) = w(prev) + (signed crossings of the segment prev -> p). The segment lies in its bounding
+// box S, and S in the union of the closed leaf-grid cells [cell(S.lo), cell(S.hi)] (at most 2 per
+// axis, checked exactly against the exact cell boundaries of Octree::cell_box); a triangle that
+// meets a closed cell is listed in that cell's leaf (empty nodes have none), so the triangles
+// that can cross the segment are the references of those leaves whose bounding box meets S,
+// each input triangle once. Box comparisons are of exact values (float boxes against S rounded
+// outwards to float: conservative), sides and crossings are exact predicates. Returns false (the
+// caller takes the reference path) when the step spans more than 2 cells on an axis, a cell is
+// an out-of-core page's stand-in for another page (an empty node that is not the cell's
+// ancestor), prev lies in a candidate's plane, or the segment is degenerate; p exactly on a
+// triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
+bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
+  const Vec3d& q = prev_p_;
+  const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
+  const Vec3d s1{std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)};
+  const int L = t_.leaf_level;
+  const double cs = t_.cell_size(L), inv = 1.0 / cs;
+  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
+  std::uint32_t r0[3], r1[3];
+  for (int a = 0; a < 3; ++a) {
+    auto cell = [&](double v) {
+      const double r = std::floor((v - t_.root_lo[a]) * inv);
+      return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
+    };
+    r0[a] = cell(s0[a]);
+    r1[a] = cell(s1[a]);
+    if (r1[a] - r0[a] > 1) return false;
+    if (!(t_.root_lo[a] + double(r0[a]) * cs <= s0[a] && s1[a] <= t_.root_lo[a] + double(r1[a] + 1) * cs))
+      return false;
+  }
+  const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
+  const float f0[3] = {float_down(s0.x), float_down(s0.y), float_down(s0.z)};
+  const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
+  const LeafTri* tris = t_.tris.data();
+  int w = prev_w_;
+  std::uint32_t seen[32];  // input triangles tested, when several leaves may list one twice
+  std::uint32_t nseen = 0;
+  auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
+    const LeafTri& t = tris[k];
+    if (several) {
+      for (std::uint32_t j = 0; j < nseen; ++j)
+        if (seen[j] == t.tri) return 1;
+      if (nseen == 32) return -1;
+      seen[nseen++] = t.tri;
+    }
+    const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
+    ++counters.planes_tested;
+    const int sq = orient3d(a, b, c, q);
+    if (sq == 0) return -1;
+    const int sp = orient3d(a, b, c, p);
+    if (sp == sq) return 1;
+    ++counters.triangles_tested;
+    switch (segment_triangle(p, q, sp, sq, a, b, c)) {
+      case Cross::none: return 1;
+      case Cross::proper: w += sq > 0 ? 1 : -1; return 1;
+      case Cross::on_p: return 0;
+      case Cross::degenerate: return -1;
+    }
+    return -1;
+  };
+  for (std::uint32_t z = r0[2]; z <= r1[2]; ++z)
+    for (std::uint32_t y = r0[1]; y <= r1[1]; ++y)
+      for (std::uint32_t x = r0[0]; x <= r1[0]; ++x) {
+        const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
+        const Node& nd = t_.nodes[i];
+        if (nd.kind != NodeKind::leaf) {
+          if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
+          continue;  // an empty node: no triangle meets its closed cell
+        }
+        const LeafBoxes& lb = leaf_boxes(nd.index);
+        const std::uint32_t base = t_.leaves[nd.index].tri_begin, n4 = lb.n4;
+        const float* lx = lb.b.data();
+        const float *ly = lx + n4, *lz = ly + n4, *hx = lz + n4, *hy = hx + n4, *hz = hy + n4;
+#if defined(__SSE2__)
+        const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
+        const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+        unsigned groups = 0;  // the groups whose box meets S (an empty group's box is empty)
+        for (int h = 0; h < 8; h += 4) {
+          __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[0] + h), ax), _mm_cmple_ps(_mm_loadu_ps(lb.glo[0] + h), bx));
+          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[1] + h), ay), _mm_cmple_ps(_mm_loadu_ps(lb.glo[1] + h), by)));
+          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[2] + h), az), _mm_cmple_ps(_mm_loadu_ps(lb.glo[2] + h), bz)));
+          groups |= unsigned(_mm_movemask_ps(m)) << h;
+        }
+#else
+        unsigned groups = 0;
+        for (int g = 0; g < 8; ++g)
+          if (!(lb.ghi[0][g] < f0[0] || lb.glo[0][g] > f1[0] || lb.ghi[1][g] < f0[1] || lb.glo[1][g] > f1[1] ||
+                lb.ghi[2][g] < f0[2] || lb.glo[2][g] > f1[2]))
+            groups |= 1u << g;
+#endif
+        for (; groups; groups &= groups - 1) {
+          const int g = __builtin_ctz(groups);
+#if defined(__SSE2__)
+          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; j += 4) {
+            __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hx + j), ax), _mm_cmple_ps(_mm_loadu_ps(lx + j), bx));
+            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hy + j), ay), _mm_cmple_ps(_mm_loadu_ps(ly + j), by)));
+            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hz + j), az), _mm_cmple_ps(_mm_loadu_ps(lz + j), bz)));
+            for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
+              const int r = test(base + lb.k[j + unsigned(__builtin_ctz(bits))]);
+              if (r < 0) return false;
+              if (r == 0) { *wout = 1; return true; }
+            }
+          }
+#else
+          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; ++j) {
+            if (hx[j] < f0[0] || lx[j] > f1[0] || hy[j] < f0[1] || ly[j] > f1[1] || hz[j] < f0[2] || lz[j] > f1[2])
+              continue;
+            const int r = test(base + lb.k[j]);
+            if (r < 0) return false;
+            if (r == 0) { *wout = 1; return true; }
+          }
+#endif
+        }
+      }
+  *wout = w;
+  prev_p_ = p;
+  prev_w_ = w;
+  return true;
+}
+
+bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {
+  (void)li;
+  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
+  const std::uint32_t n = lf.tri_count;
+  const Vec3d ref = to_d(lf.ref);
+  bool on_surface = false;
+  int delta;
+  const bool track = coherent_ && t_.closed;
+  if (track && prev_ok_) {
+    if (p == prev_p_) return prev_w_ >= 1;
+    int w;
+    if (step_from_prev(p, node, &w)) return w >= 1;
+  }
+  if (lf.ref_valid) {
+    if (leaf_winding_ref(p, ref, blk, n, lf, counters, &delta, &on_surface)) {
+      const int w = lf.ref_winding + delta;
+      if (track) {
+        prev_ok_ = true;
+        prev_p_ = p;
+        prev_w_ = w;
+      }
+      return w >= 1;
+    }
+    if (on_surface) return true;  // on the boundary: the solid is closed
+  }
+  // Rare: ref -> p passes through an edge or a vertex. Route through another point r2 of the
+  // cell: w(r2) = w(ref) - (w(ref) - w(r2)), then w(p) = w(r2) + (w(p) - w(r2)). Both segments
+  // stay in the cell, so the leaf's triangles are all that can cross them.
+  ++counters.exact_fallbacks;
+  const double cs = t_.cell_size(t_.leaf_level);
+  const double inv = 1.0 / cs;
+  Vec3d lo;
+  for (int k = 0; k < 3; ++k)
+    lo[k] = t_.root_lo[k] + std::floor((double(lf.centre[k]) - t_.root_lo[k]) * inv) * cs;
+  const Vec3d hi = lo + Vec3d(cs, cs, cs), cc = (lo + hi) * 0.5;
+  int sides[64];
+  for (const Vec3d& off : ref_offsets()) {
+    if (!lf.ref_valid) break;
+    const Vec3d r2 = round_to_float(cc + off * (0.5 * cs));
+    if (!(r2.x > lo.x && r2.x < hi.x && r2.y > lo.y && r2.y < hi.y && r2.z > lo.z && r2.z < hi.z)) continue;
+    bool ok = true;
+    std::fill(sides, sides + 64, 0);
+    auto side_r2 = [&](std::uint32_t k) {  // exact sides of r2, cached for the first 64
+      if (k < 64 && sides[k] != 0) return sides[k];
+      const LeafTri& t = blk[k];
+      const int o = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), r2);
+      if (o == 0) ok = false;
+      if (k < 64) sides[k] = o;
+      return o == 0 ? 1 : o;
+    };
+    int d1, d2;
+    bool on1 = false;
+    if (!leaf_winding(ref, r2, blk, n, lf, side_r2, counters, &d1, &on1) || !ok) continue;
+    const int w_r2 = lf.ref_winding - d1;
+    if (!leaf_winding(p, r2, blk, n, lf, side_r2, counters, &d2, &on_surface)) {
+      if (on_surface) return true;
+      continue;
+    }
+    if (!ok) continue;
+    return w_r2 + d2 >= 1;
+  }
+  return lf.ref_winding >= 1;  // no usable reference point: deterministic, documented
+}
+
+}  // namespace ebp

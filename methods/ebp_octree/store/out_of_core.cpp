@@ -1,0 +1,216 @@
+// Out-of-core queries. Inside: the pinned top tree is descended with exactly the arithmetic of
+// ebp::Query::locate; a white/black top node answers at once, a page root hands the point to the
+// page's own ebp::Query (the page is an Octree in the global frame, so the same leaf is reached
+// by the same computation). Distance: branch and bound over the top tree, pages visited nearest
+// bound first and skipped when their bound exceeds the best distance so far; inside a page the
+// page query's own branch and bound (Query::distance_bound), started with the global best. The result is
+// the lexicographic minimum of (squared distance, input triangle index) over all triangles, as
+// the in-memory answer is whatever its visiting order: the same answer, bit for bit.
+#include "methods/ebp_octree/store/out_of_core.hpp"
+
+#include "methods/ebp_octree/core/float_coords.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ebp {
+
+OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold)
+    : store_(std::make_unique<StoreReader>(path)),
+      cache_(*store_, cache_bytes, coherent),
+      coherent_(coherent),
+      cold_(cold) {
+  const FileHeader& h = store_->header();
+  top_ = store_->top_nodes().data();
+  top_children_ = store_->top_children().data();
+  top_planes_ = store_->top_planes().data();
+  root_lo_ = Vec3d(h.root_lo[0], h.root_lo[1], h.root_lo[2]);
+  root_size_ = h.root_size;
+  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;  // as Octree::build computes it
+  leaf_level_ = int(h.leaf_level);
+  page_stamp_.assign(store_->directory().size(), 0);
+  if (cold_) store_->drop_os_cache();
+}
+
+void OutOfCore::reset_path() {
+  last_page_ = last_k_ = last_leaf_ = last_node_ = UINT32_MAX;
+  if (cold_) {
+    cache_.clear();
+    store_->drop_os_cache();
+  }
+  // The page queries' own path state: they keep it only while resident, and a stale leaf or
+  // triangle of a page is still a valid hint for that page (answers do not depend on it).
+}
+
+QueryCounters OutOfCore::counters() const {
+  QueryCounters c = cache_.query_counters();
+  add_counters(c, top_counters_);
+  return c;
+}
+
+void OutOfCore::reset_counters() {
+  cache_.reset_counters();
+  top_counters_ = {};
+}
+
+std::size_t OutOfCore::bytes() const {
+  return sizeof(*this) + store_->pinned_bytes() + cache_.bookkeeping_bytes() + page_stamp_.capacity() * 4 +
+         cache_.resident_bytes();
+}
+
+bool OutOfCore::inside(const Vec3d& p) {
+  // Same arithmetic as Query::locate.
+  const int L = leaf_level_;
+  const double inv = double(std::uint64_t(1) << L) / root_size_;
+  const double G = double(std::uint64_t(1) << L);
+  const double rx = (p.x - root_lo_.x) * inv, ry = (p.y - root_lo_.y) * inv, rz = (p.z - root_lo_.z) * inv;
+  if (!(rx >= 0 && ry >= 0 && rz >= 0 && rx <= G && ry <= G && rz <= G)) {
+    ++top_counters_.hit_white;
+    return false;
+  }
+  const std::uint32_t gmax = (1u << L) - 1;
+  const std::uint32_t x = std::min(std::uint32_t(rx), gmax), y = std::min(std::uint32_t(ry), gmax),
+                      z = std::min(std::uint32_t(rz), gmax);
+  std::uint32_t i = 0;
+  int level = 0;
+  while (top_[i].kind == TopKind::inner) {
+    const int shift = L - level - 1;
+    const std::uint32_t o = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+    i = top_children_[top_[i].index + o];
+    ++level;
+    ++top_counters_.nodes_visited;
+  }
+  switch (top_[i].kind) {
+    case TopKind::white: ++top_counters_.hit_white; return false;
+    case TopKind::black: ++top_counters_.hit_black; return true;
+    default: break;
+  }
+  return cache_.get(top_[i].index).query->inside(p);
+}
+
+namespace {
+struct TopItem {
+  Vec3d lo;
+  double bound;
+  std::uint32_t node;
+  int level;
+};
+}  // namespace
+
+/// The best triangle so far of one distance query, over all pages.
+struct OutOfCore::Best {
+  DistanceBest b;  // key = input triangle index
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX, node = UINT32_MAX;
+  float a[3], bb[3], c[3];
+};
+
+// Inside one page: the in-memory branch and bound (Query::distance_bound) of the page's own
+// query, started with the global best (an upper bound that keeps its ties: pruning is by
+// `bound > best` only) and with the input triangle index as the tie key, over the page's
+// subtree (its roots' parent for a page below the top; the chain above it has no geometry).
+void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& bst) {
+  const Octree& t = e.page->tree;
+  DistanceStart s;
+  s.key_of = e.page->global_tri.data();
+  s.node = e.page->chain == 0 ? 0u : e.page->chain - 2;  // chain - 1 is the white dummy
+  if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) {
+    s.seed_tri = last_k_;
+    s.seed_leaf = last_leaf_;
+    s.seed_node = last_node_;
+  }
+  e.query->distance_bound(p, bst.b, s);
+  if (bst.b.k != UINT32_MAX) {
+    const LeafTri& tr = t.tris[bst.b.k];
+    bst.page = id;
+    bst.k = bst.b.k;
+    bst.leaf = bst.b.leaf;
+    bst.node = bst.b.node;
+    for (int i = 0; i < 3; ++i) { bst.a[i] = tr.a[i]; bst.bb[i] = tr.b[i]; bst.c[i] = tr.c[i]; }
+  }
+}
+
+DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
+  const std::uint64_t qid = ++query_id_;
+  Best bst;
+  auto visit_page = [&](std::uint32_t id) {
+    if (page_stamp_[id] == qid) return;
+    page_stamp_[id] = qid;
+    page_distance(id, cache_.get(id), p, bst);
+  };
+  if (coherent_ && last_page_ != UINT32_MAX) visit_page(last_page_);
+
+  const Vec3d pr = p - root_centre_;
+  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
+  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size_);
+  auto lower_bound = [&](const TopNode& nd, const Vec3d& lo, double size) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+      d2 += v * v;
+    }
+    const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = top_planes_ + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
+      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    top_counters_.planes_tested += nd.plane_count;
+    return std::max(b, double(m) - slack);
+  };
+
+  TopItem stack[8 * (kMaxLevel + 2)];
+  int sp = 0;
+  stack[sp++] = {root_lo_, lower_bound(top_[0], root_lo_, root_size_), 0u, 0};
+  while (sp > 0) {
+    const TopItem it = stack[--sp];
+    if (it.bound > bst.b.best) continue;
+    const TopNode& nd = top_[it.node];
+    ++top_counters_.nodes_visited;
+    if (nd.kind == TopKind::page) {
+      visit_page(nd.index);
+      continue;
+    }
+    if (nd.kind != TopKind::inner) continue;
+    const int cl = it.level + 1;
+    const double csz = root_size_ / double(std::uint64_t(1) << cl);
+    TopItem kids[8];
+    int nk = 0;
+    for (int o = 0; o < 8; ++o) {
+      const std::uint32_t ci = top_children_[nd.index + std::uint32_t(o)];
+      const TopNode& cn = top_[ci];
+      if (cn.kind == TopKind::white || cn.kind == TopKind::black) continue;
+      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+      const double b = lower_bound(cn, lo, csz);
+      if (b > bst.b.best) continue;
+      kids[nk++] = {lo, b, ci, cl};
+    }
+    for (int a = 1; a < nk; ++a) {  // descending bound: nearest popped first
+      TopItem x = kids[a];
+      int b = a - 1;
+      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+      kids[b + 1] = x;
+    }
+    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+  }
+  DistanceAnswer ans;
+  if (bst.page == UINT32_MAX) return ans;  // cannot happen: the mesh has a triangle
+  ans.distance = bst.b.best;
+  ans.closest = bst.b.closest;
+  ans.normal = bvhbench::triangle_normal(to_d(bst.a), to_d(bst.bb), to_d(bst.c));
+  ans.triangle = std::int64_t(bst.b.key);
+  if (coherent_) {
+    last_page_ = bst.page;
+    last_k_ = bst.k;
+    last_leaf_ = bst.leaf;
+    last_node_ = bst.node;
+  }
+  return ans;
+}
+
+DistanceAnswer OutOfCore::distance(const Vec3d& p) {
+  DistanceAnswer r = unsigned_distance(p);
+  if (inside(p)) r.distance = -r.distance;
+  return r;
+}
+
+}  // namespace ebp

@@ -1,0 +1,55 @@
+#pragma once
+/// The out-of-core EBP-Octree: queries answered from a `.ebp` store through a page cache with a
+/// byte budget; the top of the tree is pinned. Same answers as the in-memory ebp::Query, bit for
+/// bit (see OUT_OF_CORE.md for why).
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "methods/ebp_octree/store/page_cache.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/store/format.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+
+namespace ebp {
+
+class OutOfCore {
+ public:
+  /// Opens the store (throws bvhbench::InputError on a bad file). `cold`: evict the file from
+  /// the OS page cache now and at every reset_path(), and start each path with an empty cache.
+  OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold);
+  bool inside(const Vec3d& p);
+  DistanceAnswer distance(const Vec3d& p);
+  DistanceAnswer unsigned_distance(const Vec3d& p);
+  void reset_path();
+
+  QueryCounters counters() const;  ///< page queries + the top-tree traversal
+  void reset_counters();
+  const PageCache& cache() const { return cache_; }
+  const StoreReader& store() const { return *store_; }
+  /// Pinned bytes (top tree, directory, bookkeeping) + the cache's resident bytes.
+  std::size_t bytes() const;
+
+ private:
+  std::unique_ptr<StoreReader> store_;
+  PageCache cache_;
+  bool coherent_, cold_;
+  const TopNode* top_;
+  const std::uint32_t* top_children_;
+  const Plane* top_planes_;
+  Vec3d root_lo_, root_centre_;
+  double root_size_;
+  int leaf_level_;
+  QueryCounters top_counters_;
+  std::vector<std::uint64_t> page_stamp_;
+  std::uint64_t query_id_ = 0;
+  // coherent: page, LeafTri index and leaf (in that page) of the previous closest triangle
+  std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX, last_leaf_ = UINT32_MAX, last_node_ = UINT32_MAX;
+
+  struct Best;
+  void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
+};
+
+}  // namespace ebp

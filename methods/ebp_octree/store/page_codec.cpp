@@ -1,0 +1,202 @@
+// The page codec (page_codec.hpp): the encoder both writers use, the decoder the reader uses.
+#include "methods/ebp_octree/store/page_codec.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "harness/util/errors.hpp"
+#include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/store/crc32c.hpp"
+
+namespace ebp {
+
+namespace {
+bool finite3(const float* f) { return std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2]); }
+}  // namespace
+
+EncodedPage encode_page(PageArrays& a, std::uint32_t id, Octcode parent, PageEntry* e) {
+  std::vector<std::uint32_t> local;
+  local.reserve(a.tris.size());
+  for (const LeafTri& lt : a.tris) local.push_back(lt.tri);
+  std::sort(local.begin(), local.end());
+  local.erase(std::unique(local.begin(), local.end()), local.end());
+  for (LeafTri& lt : a.tris)
+    lt.tri = std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri) - local.begin());
+
+  PageHeader ph{};
+  ph.magic = kPageMagic;
+  ph.page_id = id;
+  ph.parent = parent;
+  ph.nroots = std::uint32_t(a.roots.size());
+  ph.nnodes = std::uint32_t(a.nodes.size());
+  ph.nchildren = std::uint32_t(a.children.size());
+  ph.nplanes = std::uint32_t(a.planes.size());
+  ph.nleaves = std::uint32_t(a.leaves.size());
+  ph.ntris = std::uint32_t(a.tris.size());
+  ph.nlocal = std::uint32_t(local.size());
+  EncodedPage out;
+  std::vector<std::uint8_t>& b = out.bytes;
+  auto put = [&](const void* p, std::size_t n) {
+    const auto* u = static_cast<const std::uint8_t*>(p);
+    b.insert(b.end(), u, u + n);
+  };
+  put(&ph, sizeof ph);
+  put(a.roots.data(), a.roots.size() * sizeof(PageRoot));
+  out.nodes_offset = b.size();
+  put(a.nodes.data(), a.nodes.size() * sizeof(Node));
+  put(a.children.data(), a.children.size() * sizeof(std::uint32_t));
+  put(a.planes.data(), a.planes.size() * sizeof(Plane));
+  out.leaves_offset = b.size();
+  put(a.leaves.data(), a.leaves.size() * sizeof(Leaf));
+  put(a.tris.data(), a.tris.size() * sizeof(LeafTri));
+  put(local.data(), local.size() * sizeof(std::uint32_t));
+  if (b.size() > kMaxPageBytes) throw std::runtime_error("ebp store: a page exceeds 1 GiB (one leaf too large)");
+  e->size = std::uint32_t(b.size());
+  e->crc = crc32c(b.data(), b.size());
+  e->parent = parent;
+  e->triangles = ph.ntris;
+  e->nodes = ph.nnodes;
+  return out;
+}
+
+std::unique_ptr<Page> decode_page(const std::uint8_t* data, std::size_t size, const PageContext& c,
+                                  const std::string& path) {
+  const std::string where = "page " + std::to_string(c.id) + ": ";
+  auto fail = [&](const std::string& what) { throw bvhbench::file_error(path, what); };
+  if (size < sizeof(PageHeader)) fail(where + "bad size " + std::to_string(size));  // the reader checked it
+  PageHeader ph;
+  std::memcpy(&ph, data, sizeof ph);
+  if (ph.magic != kPageMagic) fail(where + "bad page magic");
+  if (ph.page_id != c.id) fail(where + "page id mismatch");
+  if (ph.parent != c.parent) fail(where + "parent code mismatch");
+  const std::uint64_t need = sizeof(PageHeader) + std::uint64_t(ph.nroots) * sizeof(PageRoot) +
+                             std::uint64_t(ph.nnodes) * sizeof(Node) + std::uint64_t(ph.nchildren) * 4 +
+                             std::uint64_t(ph.nplanes) * sizeof(Plane) + std::uint64_t(ph.nleaves) * sizeof(Leaf) +
+                             std::uint64_t(ph.ntris) * sizeof(LeafTri) + std::uint64_t(ph.nlocal) * 4;
+  if (need != size) fail(where + "array sizes do not add up to the page size");
+  const int L = c.leaf_level;
+  const bool root_page = ph.parent == kNoParent;
+  int lp = -1;
+  if (!root_page) {
+    lp = octcode_level(ph.parent);
+    if (lp >= L || octcode_make(lp, octcode_morton(ph.parent)) != ph.parent) fail(where + "bad parent code");
+  }
+  if (ph.nroots == 0 || ph.nroots > 8 || (root_page && ph.nroots != 1)) fail(where + "bad number of roots");
+  if (ph.nnodes == 0) fail(where + "no nodes");
+
+  const std::uint8_t* p = data + sizeof(PageHeader);
+  std::vector<PageRoot> roots(ph.nroots);
+  auto take = [&](void* dst, std::size_t n) {
+    if (n) std::memcpy(dst, p, n);
+    p += n;
+  };
+  take(roots.data(), roots.size() * sizeof(PageRoot));
+  auto page = std::make_unique<Page>();
+  page->id = c.id;
+  Octree& T = page->tree;
+  const std::uint32_t chain = root_page ? 0u : std::uint32_t(lp + 2);  // chain nodes + the white dummy
+  const std::uint32_t cbase = root_page ? 0u : std::uint32_t(8 * (lp + 1));
+  if (std::uint64_t(ph.nnodes) + chain >= 0xffffffffull || std::uint64_t(ph.nchildren) + cbase >= 0xffffffffull)
+    fail(where + "too many nodes");
+  T.nodes.resize(chain + ph.nnodes);
+  T.children.resize(cbase + ph.nchildren);
+  T.planes.resize(ph.nplanes);
+  T.leaves.resize(ph.nleaves);
+  T.tris.resize(ph.ntris);
+  page->global_tri.resize(ph.nlocal);
+  take(T.nodes.data() + chain, std::size_t(ph.nnodes) * sizeof(Node));
+  take(T.children.data() + cbase, std::size_t(ph.nchildren) * 4);
+  take(T.planes.data(), std::size_t(ph.nplanes) * sizeof(Plane));
+  take(T.leaves.data(), std::size_t(ph.nleaves) * sizeof(Leaf));
+  take(T.tris.data(), std::size_t(ph.ntris) * sizeof(LeafTri));
+  take(page->global_tri.data(), std::size_t(ph.nlocal) * 4);
+
+  // Roots: octants distinct, matching the top tree's entries for this page, codes right.
+  std::uint8_t mask = 0;
+  for (const PageRoot& r : roots) {
+    if (r.node >= ph.nnodes) fail(where + "root node out of range");
+    if (root_page) {
+      if (r.node != 0 || T.nodes[chain + r.node].code != octcode_root()) fail(where + "bad root");
+      mask = 1;
+      continue;
+    }
+    if (r.octant > 7 || (mask & (1u << r.octant))) fail(where + "bad root octant");
+    mask |= std::uint8_t(1u << r.octant);
+    if (T.nodes[chain + r.node].code != octcode_child(ph.parent, int(r.octant))) fail(where + "root code mismatch");
+  }
+  if (mask != c.octants) fail(where + "roots do not match the top tree");
+  // Nodes.
+  for (std::uint32_t k = 0; k < ph.nnodes; ++k) {
+    Node& nd = T.nodes[chain + k];
+    const int lvl = octcode_level(nd.code);
+    if (lvl > L || std::uint8_t(nd.kind) > 3 || std::uint8_t(nd.config) > 2) fail(where + "bad node " + std::to_string(k));
+    if (std::uint64_t(nd.plane_begin) + nd.plane_count > ph.nplanes) fail(where + "plane range out of bounds");
+    if (nd.next > ph.nnodes || nd.next <= k) fail(where + "bad subtree end");
+    nd.next += chain;
+    if (nd.kind == NodeKind::inner) {
+      if (lvl >= L) fail(where + "inner node at the leaf level");
+      if (std::uint64_t(nd.index) + 8 > ph.nchildren) fail(where + "children out of bounds");
+      for (std::uint32_t o = 0; o < 8; ++o) {
+        std::uint32_t& c = T.children[cbase + nd.index + o];
+        if (c >= ph.nnodes || c <= k) fail(where + "bad child index");
+        if (T.nodes[chain + c].code != octcode_child(nd.code, int(o))) fail(where + "child code mismatch");
+        c += chain;
+      }
+      nd.index += cbase;
+    } else if (nd.kind == NodeKind::leaf) {
+      if (lvl != L) fail(where + "leaf above the leaf level");
+      if (nd.index >= ph.nleaves) fail(where + "leaf index out of range");
+    }
+  }
+  for (const Plane& pl : T.planes)
+    if (!finite3(pl.n) || !std::isfinite(pl.d)) fail(where + "non-finite plane");
+  for (const Leaf& lf : T.leaves) {
+    if (!finite3(lf.centre) || !finite3(lf.ref) || !std::isfinite(lf.eps) || !(lf.eps >= 0))
+      fail(where + "non-finite leaf record");
+    if (std::uint64_t(lf.tri_begin) + lf.tri_count > ph.ntris) fail(where + "leaf triangle block out of bounds");
+  }
+  for (const LeafTri& lt : T.tris) {
+    if (!finite3(lt.a) || !finite3(lt.b) || !finite3(lt.c) || !finite3(lt.n) || !std::isfinite(lt.d))
+      fail(where + "non-finite triangle");
+    if (lt.tri >= ph.nlocal) fail(where + "triangle index out of range");
+  }
+  for (std::uint32_t k = 0; k < ph.nlocal; ++k)
+    if (page->global_tri[k] >= c.num_triangles || (k > 0 && page->global_tri[k] <= page->global_tri[k - 1]))
+      fail(where + "bad triangle table");
+
+  // The chain from the root to the parent, and the white dummy.
+  if (!root_page) {
+    const std::uint32_t dummy = std::uint32_t(lp + 1);
+    const std::uint64_t pm = octcode_morton(ph.parent);
+    for (int k = 0; k <= lp; ++k) {
+      Node& nd = T.nodes[std::size_t(k)];
+      nd = Node{};
+      nd.code = octcode_make(k, pm >> (3 * (lp - k)));
+      nd.kind = NodeKind::inner;
+      nd.config = LeafConfig::special;
+      nd.index = std::uint32_t(8 * k);
+      nd.next = std::uint32_t(T.nodes.size());
+      for (std::uint32_t o = 0; o < 8; ++o) T.children[std::size_t(8 * k) + o] = dummy;
+      if (k < lp) T.children[std::size_t(8 * k) + std::uint32_t(octcode_octant(octcode_make(k + 1, pm >> (3 * (lp - k - 1)))))] = std::uint32_t(k + 1);
+    }
+    for (const PageRoot& r : roots) T.children[std::size_t(8 * lp) + r.octant] = chain + r.node;
+    Node& d = T.nodes[dummy];
+    d = Node{};
+    d.code = kNoParent;
+    d.kind = NodeKind::white;
+    d.next = dummy + 1;
+  }
+  T.root_lo = c.root_lo;
+  T.root_size = c.root_size;
+  T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;
+  T.leaf_level = L;
+  T.num_triangles = ph.nlocal;
+  T.closed = c.closed;
+  compute_leaf_blocks(T);  // derived boxes (not in the file)
+  page->chain = chain;
+  return page;
+}
+
+}  // namespace ebp
