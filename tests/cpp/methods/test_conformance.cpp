@@ -2,7 +2,7 @@
 // the coherent variant (`coherent=true`) of each method that declares coherence: a method added
 // under methods/ is checked here with no change to this file.
 //
-// What every method must do (methods/README.md, "The interface"; ARCHITECTURE.md, "Queries"):
+// What every method must do (methods/README.md, "The interface"; docs/architecture.md, "Contracts"):
 //  - answer inside and distance like brute_force on the real shared meshes, for random and haptic
 //    query sets made by the harness's own generators, within what its precision allows (below);
 //  - supports() agrees with the registered capabilities; structure_bytes() > 0 after build; the
@@ -13,7 +13,7 @@
 //    and open surfaces: no crash, and the answers below.
 //
 // Precision. The registry does not declare a method's precision, so the few methods whose
-// precision differs from the contract's default (ARCHITECTURE.md: methods keep float32
+// precision differs from the contract's default (docs/meshes.md: methods keep float32
 // coordinates) are named in declared_precision(); a new method gets the float32 checks.
 //  - exact_double (brute_force): the reference itself; a fresh instance agrees bit for bit.
 //  - exact_float32 (ebp_octree): exact on the float32-rounded mesh, so bit for bit with
@@ -494,7 +494,7 @@ TEST_P(MethodConformance, PointsOnTheSurfaceOfAClosedMesh) {
   EXPECT_FALSE(in->inside({3, 3, 3}));
 }
 
-// Zero-area, collapsed and duplicate triangles are valid input (ARCHITECTURE.md): inside stays
+// Zero-area, collapsed and duplicate triangles are valid input (docs/architecture.md, "Contracts"): inside stays
 // right and distances match brute force; a mesh of nothing but zero-area triangles is a segment.
 TEST_P(MethodConformance, DegenerateTriangles) {
   const Variant& v = GetParam();
