@@ -1,16 +1,13 @@
 #pragma once
 /// The `bvhbench` subcommands. Each add_*_command() adds one subcommand with its options and
 /// callback to the CLI app; main.cpp calls them all, then the commands methods register.
-/// Callbacks report failure by throwing: InputError (exit 2) or ExitCode (any code).
+/// Callbacks report failure by throwing: InputError (exit 2) or ExitCode (any code), both in
+/// harness/util/errors.hpp.
+#include "harness/util/errors.hpp"
 
 namespace CLI { class App; }
 
 namespace bvhbench {
-
-/// Thrown by a command to end the program with this exit code (after writing its outputs).
-struct ExitCode {
-  int code;
-};
 
 void add_methods_command(CLI::App& app);    // methods_command.cpp
 void add_queries_command(CLI::App& app);    // queries_command.cpp

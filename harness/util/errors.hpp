@@ -1,7 +1,7 @@
 #pragma once
 /// Error kinds that cross the harness boundary. Each maps to a status and an exit code
-/// (docs/architecture.md, "Contracts": exit codes): anything thrown inside a method or a reader is caught in
-/// `run_job` / `main` and turned into a status row and a message, never a crash.
+/// (docs/architecture.md, "Contracts": exit codes): anything thrown inside a method or a reader is
+/// caught in `run_job` / `main` and turned into a status row and a message, never a crash.
 #include <stdexcept>
 #include <string>
 
@@ -19,6 +19,12 @@ struct InputError : std::runtime_error {
 /// A method cannot answer this kind of query (status `unsupported`). Never faked.
 struct UnsupportedError : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+/// Thrown by a command (the harness's or a method's, such as `bvhbench ebp verify`) to end the
+/// program with this exit code after writing its outputs; main() returns it.
+struct ExitCode {
+  int code;
 };
 
 /// Formats "FILE: problem" the way every reader reports errors. Both parts go through

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "harness/cli/commands.hpp"
+#include "harness/util/errors.hpp"
 #include "harness/util/printable.hpp"
 #include "harness/util/progress.hpp"
 #include "methods/ebp_octree/commands.hpp"
