@@ -104,6 +104,7 @@ const ResultSchema& ResultSchema::get() {
 }
 
 const ResultField* ResultSchema::describe(const std::vector<std::string>& path) const {
+  if (path.empty()) return nullptr;  // the result itself is not a field
   const ResultField* wildcard = nullptr;
   for (const ResultField& f : fields_) {
     const std::vector<std::string> p = split_path(f.path);

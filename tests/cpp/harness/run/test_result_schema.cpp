@@ -55,6 +55,7 @@ TEST(ResultSchema, DescribeMatchesExactThenWildcardThenFreeForm) {
   EXPECT_EQ(s.describe({"structure", "levels", "deep", "er"})->path, "structure.*");
   EXPECT_EQ(s.describe({"job", "colour"}), nullptr);
   EXPECT_EQ(s.describe({"counters", "x", "y"}), nullptr);  // counters.* is a number, not an object
+  EXPECT_EQ(s.describe({}), nullptr);
 }
 
 TEST(ResultSchema, StatusRowSkeletonFollowsTheSchema) {
