@@ -45,9 +45,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "datasets-scripts"))
+from bvhdata.ply import read_ply  # noqa: E402
 
 
 # ------------------------------------------------------------------------------------------------
@@ -71,37 +75,10 @@ def read_obj(path: str) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(verts, dtype=np.float64), np.asarray(faces, dtype=np.int64)
 
 
-def read_ply(path: str) -> tuple[np.ndarray, np.ndarray]:
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline()
-            if not line:
-                raise ValueError(f"{path}: no end_header")
-            line = line.decode("ascii").strip()
-            header.append(line)
-            if line == "end_header":
-                break
-        if "format binary_little_endian 1.0" not in header:
-            raise ValueError(f"{path}: only binary little-endian PLY (as datasets-scripts writes)")
-        nv = nf = 0
-        coord = "<f4"
-        for line in header:
-            tok = line.split()
-            if tok[:2] == ["element", "vertex"]:
-                nv = int(tok[2])
-            elif tok[:2] == ["element", "face"]:
-                nf = int(tok[2])
-            elif tok[:2] == ["property", "double"]:
-                coord = "<f8"
-        v = np.fromfile(f, dtype=coord, count=3 * nv).reshape(nv, 3).astype(np.float64)
-        rec = np.fromfile(f, dtype=np.dtype([("n", "u1"), ("i", "<i4", (3,))]), count=nf)
-        if not np.all(rec["n"] == 3):
-            raise ValueError(f"{path}: non-triangle face")
-    return v, rec["i"].astype(np.int64)
-
-
 def read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """PLY as datasets-scripts writes it (its own reader), or OBJ (the shared meshes): the
+    vertices and triangles in the order the runner reads them, so that triangle indices match
+    the oracle's."""
     return read_ply(path) if path.lower().endswith(".ply") else read_obj(path)
 
 
