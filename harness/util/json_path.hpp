@@ -10,11 +10,13 @@
 
 namespace bvhbench {
 
-/// j[k0][k1]... or a null value when any key is missing or a step is not an object.
-inline const nlohmann::json& json_at(const nlohmann::json& j, std::initializer_list<const char*> path) {
+/// j[k0][k1]... or a null value when any key is missing or a step is not an object; `keys` is any
+/// range of things a key can be made of (const char*, std::string).
+template <class Keys>
+const nlohmann::json& json_at_keys(const nlohmann::json& j, const Keys& keys) {
   static const nlohmann::json null_json;
   const nlohmann::json* p = &j;
-  for (const char* k : path) {
+  for (const auto& k : keys) {
     if (!p->is_object()) return null_json;
     auto it = p->find(k);
     if (it == p->end()) return null_json;
@@ -23,17 +25,14 @@ inline const nlohmann::json& json_at(const nlohmann::json& j, std::initializer_l
   return *p;
 }
 
-/// The same for a path held at run time (a schema's field, split at its dots).
+/// A path written in code: json_at(r, {"job", "mesh", "name"}).
+inline const nlohmann::json& json_at(const nlohmann::json& j, std::initializer_list<const char*> path) {
+  return json_at_keys(j, path);
+}
+
+/// A path held at run time (a schema's field, split at its dots).
 inline const nlohmann::json& json_at(const nlohmann::json& j, const std::vector<std::string>& path) {
-  static const nlohmann::json null_json;
-  const nlohmann::json* p = &j;
-  for (const std::string& k : path) {
-    if (!p->is_object()) return null_json;
-    auto it = p->find(k);
-    if (it == p->end()) return null_json;
-    p = &*it;
-  }
-  return *p;
+  return json_at_keys(j, path);
 }
 
 }  // namespace bvhbench
