@@ -1,12 +1,13 @@
 // The EBP-Octree far from the origin (octree.hpp, "The frame"): a model 1e6 or 1e7 from the
 // origin keeps its own precision, because the structure stores float(v - origin). Inside and
 // distance, in memory (through the registry, as the harness runs it) and out of core (the store
-// written from memory and the external build), against an exact brute force in double on the very
+// written from memory and the external build, from arrays and from a file), against an exact brute force in double on the very
 // vertices the structure holds; the frame chosen for ordinary models is the origin (nothing
 // changes for them); a store of the older format (world coordinates) is refused.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -92,15 +93,17 @@ struct Answers {
   std::vector<bvhbench::DistanceResult> distance;
 };
 
-/// Checks `a` against the brute force: inside exactly, distance to 1e-9 of the model's size (the
-/// translation rounds in double), the closest point at that distance, the triangle's distance
-/// equal to it. Points within 1e-7 of the size of the surface are skipped for inside (the
-/// winding number's own rounding).
+/// Checks `a` against the brute force: inside exactly; distance, the closest point's distance and
+/// the answered triangle's distance within 1e-9 of the model's size plus 1e-13 of its distance
+/// from the origin (the brute force's own double rounding there: ~20 ulps of 1e6 seen; float
+/// world coordinates would be off by 1e-2). Points within 1e-7 of the size of the surface are
+/// skipped for inside (the winding number's own rounding).
 void expect_exact(const bvhbench::Mesh& m, const std::vector<Vec3d>& pts, const Answers& a, const std::string& what) {
   const Brute bf{m};
   Box3d b;
   for (const Vec3d& v : m.vertices) b.add(v);
   const double size = b.diagonal();
+  const double tol = 1e-9 * size + 1e-13 * std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z)});
   int bad_inside = 0, bad_distance = 0, checked_inside = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const double d = bf.distance(pts[i]);
@@ -110,8 +113,8 @@ void expect_exact(const bvhbench::Mesh& m, const std::vector<Vec3d>& pts, const 
     }
     const bvhbench::DistanceResult& r = a.distance[i];
     const bool in = bool(a.inside[i]);
-    if (std::fabs(std::fabs(r.distance) - d) > 1e-9 * size || (d > 0 && (r.distance < 0) != in) ||
-        std::fabs(norm(r.closest - pts[i]) - d) > 1e-9 * size || std::fabs(bf.tri_distance(pts[i], r.triangle) - d) > 1e-9 * size)
+    if (std::fabs(std::fabs(r.distance) - d) > tol || (d > 0 && (r.distance < 0) != in) ||
+        std::fabs(norm(r.closest - pts[i]) - d) > tol || std::fabs(bf.tri_distance(pts[i], r.triangle) - d) > tol)
       ++bad_distance;
   }
   EXPECT_EQ(bad_inside, 0) << what << " (" << checked_inside << " inside queries)";
@@ -187,7 +190,28 @@ void check_far(const bvhbench::Mesh& base, double offset, const std::string& nam
   build_store_external(*src, external, eo);
   const FileHeader h = StoreReader(external).header();
   EXPECT_EQ(Vec3d(h.origin[0], h.origin[1], h.origin[2]), t.origin) << name;
-  for (const std::string& store : {written, external}) {
+  // From a file (OBJ with every digit of the doubles): the file source reads the vertices twice
+  // (the second time as float(v - origin)); the same store.
+  const std::string obj = d.file("far.obj"), from_file = d.file("file.ebp");
+  {
+    std::ofstream o(obj);
+    char line[128];
+    for (const Vec3d& v : m.vertices) {
+      std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x, v.y, v.z);
+      o << line;
+    }
+    for (const auto& f : m.triangles) o << "f " << f[0] + 1 << ' ' << f[1] + 1 << ' ' << f[2] + 1 << '\n';
+  }
+  auto file_src = open_mesh_source(obj);
+  build_store_external(*file_src, from_file, eo);
+  {
+    StoreReader a(written), b(from_file);
+    EXPECT_EQ(std::memcmp(a.header().origin, b.header().origin, sizeof h.origin), 0) << name;
+    ASSERT_EQ(a.directory().size(), b.directory().size()) << name;
+    for (std::size_t i = 0; i < a.directory().size(); ++i)
+      EXPECT_EQ(a.directory()[i].crc, b.directory()[i].crc) << name << ": page " << i;
+  }
+  for (const std::string& store : {written, external, from_file}) {
     const Answers ooc = out_of_core(store, pts, false);
     EXPECT_TRUE(same_answers(mem, ooc)) << name << " out of core, " << store;
     EXPECT_TRUE(same_answers(mem, out_of_core(store, pts, true))) << name << " out of core coherent, " << store;
