@@ -91,15 +91,21 @@ large: build
 	$(BVHBENCH) suite suites/large.yml --out results/large --resume
 	$(VPY) plots/report.py results/large
 
+# $(call build_stores,DIR,MODELS): DIR/M.ebp built out of core (1 GiB budget, 2 threads) for each
+# model M whose store is missing or older than DIR/M.ply.
+define build_stores
+	@for m in $(2); do \
+	  if [ ! -f $(1)/$$m.ebp ] || [ $(1)/$$m.ply -nt $(1)/$$m.ebp ]; then \
+	    $(BVHBENCH) ebp build --mesh $(1)/$$m.ply --out $(1)/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
+	  fi; \
+	done
+endef
+
 PAPER_MODELS := bunny_closed_32m scan_like_32m
 
 paper: build
 	$(VPY) datasets-scripts/make_datasets.py --preset paper
-	@for m in $(PAPER_MODELS); do \
-	  if [ ! -f data/paper/$$m.ebp ] || [ data/paper/$$m.ply -nt data/paper/$$m.ebp ]; then \
-	    $(BVHBENCH) ebp build --mesh data/paper/$$m.ply --out data/paper/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
-	  fi; \
-	done
+	$(call build_stores,data/paper,$(PAPER_MODELS))
 	$(BVHBENCH) suite suites/paper.yml --out results/paper --resume
 	$(VPY) plots/report.py results/paper
 
@@ -110,11 +116,7 @@ HUGE_MODELS := scan_like_128m
 
 huge: build
 	$(VPY) datasets-scripts/make_datasets.py --preset huge
-	@for m in $(HUGE_MODELS); do \
-	  if [ ! -f data/huge/$$m.ebp ] || [ data/huge/$$m.ply -nt data/huge/$$m.ebp ]; then \
-	    $(BVHBENCH) ebp build --mesh data/huge/$$m.ply --out data/huge/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
-	  fi; \
-	done
+	$(call build_stores,data/huge,$(HUGE_MODELS))
 	$(BVHBENCH) suite suites/huge.yml --out results/huge --resume
 	$(VPY) plots/report.py results/huge
 
