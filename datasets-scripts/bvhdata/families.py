@@ -38,6 +38,9 @@ class Family:
     kind: str                            # "real", "procedural" or "stress"
     description: str
     closed: Optional[bool] = None        # True: the output must be watertight and outward
+    # A streamed family writes its PLY itself, in bounded memory: writer(path, **params) -> the
+    # manifest's statistics + sha256, bytes, operations (fn is then never called).
+    writer: Optional[Callable[..., dict]] = None
 
 
 class Context:
@@ -225,10 +228,10 @@ def trefoil(ctx: Context, triangles: int, tube_radius: float) -> Generated:
     return Generated(v, f, "procedural", [{"op": "trefoil_tube_grid", "nu": nu, "nv": nv}])
 
 
-def _multiscale_noise(d: np.ndarray, rng: np.random.Generator, octaves: int, base_frequency: float,
-                      amplitude: float, waves: int) -> np.ndarray:
-    """Sum over octaves of random plane waves on unit directions d (amplitude halves, frequency
-    doubles per octave). Parameters are drawn first, then evaluated in chunks."""
+def noise_params(rng: np.random.Generator, octaves: int, base_frequency: float, amplitude: float,
+                 waves: int) -> list:
+    """The random plane waves of multi-scale noise, octave by octave (amplitude halves, frequency
+    doubles per octave): [(wave vectors, phases, amplitude)]."""
     params = []
     for o in range(octaves):
         w = rng.standard_normal((waves, 3))
@@ -236,6 +239,11 @@ def _multiscale_noise(d: np.ndarray, rng: np.random.Generator, octaves: int, bas
         phase = rng.uniform(0, 2 * math.pi, waves)
         params.append((w * (2 * math.pi * base_frequency * 2**o), phase,
                        amplitude * 0.5**o * math.sqrt(2.0 / waves)))
+    return params
+
+
+def noise_eval(d: np.ndarray, params: list) -> np.ndarray:
+    """The noise of `params` (noise_params) at unit directions d, in chunks."""
     out = np.zeros(len(d))
     chunk = 1 << 20
     for s in range(0, len(d), chunk):
@@ -245,6 +253,13 @@ def _multiscale_noise(d: np.ndarray, rng: np.random.Generator, octaves: int, bas
             acc += a * np.sin(dd @ w.T + phase).sum(1)
         out[s:s + chunk] = acc
     return out
+
+
+def _multiscale_noise(d: np.ndarray, rng: np.random.Generator, octaves: int, base_frequency: float,
+                      amplitude: float, waves: int) -> np.ndarray:
+    """Sum over octaves of random plane waves on unit directions d. Parameters are drawn first,
+    then evaluated in chunks."""
+    return noise_eval(d, noise_params(rng, octaves, base_frequency, amplitude, waves))
 
 
 def scan_like(ctx: Context, triangles: int, seed: int, amplitude: float, octaves: int,
@@ -466,6 +481,15 @@ def stress_empty(ctx):
                      [{"op": "empty"}], expect="rejected_input")
 
 
+def _streamed_only(ctx, **params):
+    raise ValueError("a streamed family is written by make_datasets.py directly (no arrays)")
+
+
+def _write_scan_like_streamed(path: str, **params) -> dict:
+    from .streamed_scan import write_scan_like  # imports this module: loaded when used
+    return write_scan_like(path, **params)
+
+
 # =============================================================================================
 # the registry
 # =============================================================================================
@@ -492,6 +516,13 @@ FAMILIES: dict[str, Family] = {
                                     "jitter": 0.05, "scale": [1.0, 0.8, 0.65]}, "procedural",
                         "sphere with multi-scale noise displacement and scanner-like jitter",
                         closed=True),
+    "scan_like_streamed": Family(_streamed_only, {"triangles": 128_000_000, "seed": 1, "amplitude": 0.18,
+                                                  "octaves": 6, "base_frequency": 0.8, "waves": 12,
+                                                  "jitter": 0.05, "scale": [1.0, 0.8, 0.65]},
+                                 "procedural",
+                                 "scan_like at 100M+ triangles (cube lattice, no subdivision), "
+                                 "written in chunks in bounded memory",
+                                 closed=True, writer=_write_scan_like_streamed),
     "gyroid": Family(gyroid, {"triangles": 100_000, "cells": 2.5, "thickness": 0.4,
                               "radius": 1.0, "max_grid": 256}, "procedural",
                      "gyroid sheet clipped by a ball, marching cubes (high genus, thin walls)",

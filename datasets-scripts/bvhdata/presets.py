@@ -67,7 +67,8 @@ PRESETS: dict[str, list] = {
     # small: every family and every stress case (the test suite runs it)
     "ci": (_open_real() + _closed_real() + _closed_real(150_000, only=("bunny",))
            + [_proc("sphere", 5_000), _proc("torus", 5_000), _proc("trefoil", 5_000),
-              _proc("scan_like", 10_000), _proc("gyroid", 20_000)]
+              _proc("scan_like", 10_000), _proc("gyroid", 20_000),
+              ("scan_like_streamed_2k", "scan_like_streamed", {"triangles": 2_000})]
            + _stress(small=True)),
     # what `make bench` uses
     "default": (_closed_real() + _closed_real(1_000_000, only=("bunny",))
@@ -79,4 +80,6 @@ PRESETS: dict[str, list] = {
     "stability": _open_real() + _stress(),
     # the paper's scale: 30M+ from a real scan and procedural
     "paper": (_closed_real(32_000_000, only=("bunny",)) + [_proc("scan_like", 32_000_000)]),
+    # beyond the paper (`make huge`): 128M triangles, the St. Matthew class, written in chunks
+    "huge": [("scan_like_128m", "scan_like_streamed", {"triangles": 128_000_000})],
 }

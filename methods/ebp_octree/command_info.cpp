@@ -39,6 +39,7 @@ void add_info_command(CLI::App& ebp_cmd) {
     j["path"] = o->path;
     j["version"] = h.version;
     j["file_bytes"] = h.file_size;
+    j["frame_origin"] = {h.origin[0], h.origin[1], h.origin[2]};
     j["root"] = {{"lo", {h.root_lo[0], h.root_lo[1], h.root_lo[2]}}, {"size", h.root_size}};
     j["leaf_level"] = h.leaf_level;
     j["levels"] = h.leaf_level + 1;
@@ -69,7 +70,8 @@ void add_info_command(CLI::App& ebp_cmd) {
     std::printf("EBP-Octree store %s (version %u, %.1f MiB)\n", o->path.c_str(), h.version, double(h.file_size) / 1048576.0);
     std::printf("  mesh              %s (%u triangles, %s)\n", info.value("mesh", std::string("?")).c_str(), h.num_triangles,
                 (h.flags & ebp::kStoreClosed) ? "closed" : "not known to be closed");
-    std::printf("  root cube         lo (%.9g, %.9g, %.9g), size %.9g\n", h.root_lo[0], h.root_lo[1], h.root_lo[2], h.root_size);
+    std::printf("  frame origin      (%.17g, %.17g, %.17g)\n", h.origin[0], h.origin[1], h.origin[2]);
+    std::printf("  root cube         lo (%.9g, %.9g, %.9g) in the frame, size %.9g\n", h.root_lo[0], h.root_lo[1], h.root_lo[2], h.root_size);
     std::printf("  levels            %u (leaf level %u)\n", h.leaf_level + 1, h.leaf_level);
     std::printf("  parameters        leaf_factor=%g max_planes=%d cluster_angle=%g\n", h.leaf_factor, h.max_planes, h.cluster_angle);
     std::printf("  nodes             %lu: %lu grey inner, %lu grey leaves, %lu white, %lu black\n",

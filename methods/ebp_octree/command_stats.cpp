@@ -58,6 +58,9 @@ void add_stats_command(CLI::App& ebp_cmd) {
                 s.max_refs_per_leaf);
     std::printf("  memory            %zu bytes, %.1f bytes per triangle (%zu of derived boxes)\n", t.bytes() + t.derived_bytes(),
                 j["bytes_per_triangle"].get<double>(), t.derived_bytes());
+    std::printf("  bytes / triangle ");
+    for (auto& [name, part] : j["bytes_breakdown"].items()) std::printf(" %s %.1f", name.c_str(), part["per_triangle"].get<double>());
+    std::printf("\n");
     std::printf("  tightness         bounding volume / cell box: %.3f leaves, %.3f inner nodes (exact polytope volumes)\n",
                 j["tightness"]["leaves"].get<double>(), j["tightness"]["inner"].get<double>());
     std::printf("  colouring         %zu winding fallbacks, %zu degenerate edges, %zu leaves without reference\n",

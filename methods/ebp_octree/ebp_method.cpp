@@ -71,6 +71,7 @@ nlohmann::json stats_json(const ebp::Octree& t) {
   const ebp::Stats& s = t.stats;
   const std::size_t grey = s.inner + s.leaves;
   nlohmann::json j;
+  j["frame_origin"] = {t.origin.x, t.origin.y, t.origin.z};
   j["leaf_level"] = s.leaf_level;
   j["levels"] = s.leaf_level + 1;
   j["root_size"] = s.root_size;
@@ -89,6 +90,23 @@ nlohmann::json stats_json(const ebp::Octree& t) {
                         {"per_triangle", s.triangles ? double(s.triangle_refs) / double(s.triangles) : 0.0},
                         {"per_leaf_mean", s.leaves ? double(s.triangle_refs) / double(s.leaves) : 0.0},
                         {"per_leaf_max", s.max_refs_per_leaf}};
+  // Where the bytes go, part by part (DESIGN.md, "Bytes per triangle"): capacities, as bytes() counts.
+  {
+    const double nt = s.triangles ? double(s.triangles) : 1.0;
+    nlohmann::json parts = nlohmann::json::object();
+    auto part = [&](const char* name, std::size_t bytes, std::size_t count) {
+      parts[name] = {{"bytes", bytes}, {"count", count}, {"per_triangle", double(bytes) / nt}};
+    };
+    part("leaf_triangles", t.tris.capacity() * sizeof(ebp::LeafTri), t.tris.size());
+    part("nodes", t.nodes.capacity() * sizeof(ebp::Node), t.nodes.size());
+    part("children", t.children.capacity() * sizeof(std::uint32_t), t.children.size());
+    part("planes", t.planes.capacity() * sizeof(ebp::Plane), t.planes.size());
+    part("leaves", t.leaves.capacity() * sizeof(ebp::Leaf), t.leaves.size());
+    part("block_boxes", t.blocks.capacity() * sizeof(ebp::BlockBox), t.blocks.size());
+    part("leaf_block_index", t.leaf_block.capacity() * sizeof(std::uint32_t), t.leaf_block.size());
+    part("node_boxes", t.node_box.capacity() * sizeof(ebp::BlockBox), t.node_box.size());
+    j["bytes_breakdown"] = parts;
+  }
   j["bytes"] = t.bytes() + t.derived_bytes();
   j["derived_bytes"] = t.derived_bytes();  // leaf-block and node boxes, computed at build/load
   j["bytes_per_triangle"] = s.triangles ? double(t.bytes() + t.derived_bytes()) / double(s.triangles) : 0.0;
@@ -118,8 +136,13 @@ class EbpOctreeMethod final : public Method {
     query_.emplace(tree_, coherent_);
   }
   bool supports(QueryType) const override { return true; }
-  bool inside(const Vec3d& p) override { return query_->inside(p); }
-  DistanceResult distance(const Vec3d& p) override { return to_distance_result(query_->distance(p)); }
+  // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
+  bool inside(const Vec3d& p) override { return query_->inside(tree_.to_frame(p)); }
+  DistanceResult distance(const Vec3d& p) override {
+    DistanceResult r = to_distance_result(query_->distance(tree_.to_frame(p)));
+    r.closest = tree_.to_world(r.closest);
+    return r;
+  }
   void reset_path() override {
     if (query_) query_->reset_path();
   }

@@ -14,6 +14,15 @@
 
 namespace ebp::detail {
 
+/// The frame origin of a build (Octree::origin) from the bounds of all the input's vertices (in
+/// double, as read): each coordinate of the box centre rounded to a multiple of g, the power of two
+/// >= 8 x the box's largest extent. So a model whose centre is within ~4 extents of the origin
+/// gets origin 0 (its float geometry is the input rounded to float, as always), and a model far
+/// out gets a coarse origin near its centre (float(v - origin) keeps ~2^-24 of 8 x its size); the
+/// origin is a multiple of g, so v - origin is exact in double for every vertex. Both builds
+/// (in memory and external) compute it from the same bounds: the same frame, the same bytes.
+Vec3d choose_origin(const Box3d& vertex_bounds);
+
 /// Bounding box and edge-length sum of the triangles, accumulated in input order (the edge sum is
 /// a double sum whose order matters: both builds add triangle by triangle, in input order).
 struct FrameAccumulator {

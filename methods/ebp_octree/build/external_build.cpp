@@ -552,7 +552,7 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   R.pages = as.dir.size();
   R.top_nodes = as.top.size();
 
-  FileHeader h = new_file_header(F.root_lo, F.root_size, L, std::uint32_t(nt), prm, opt.page_target, R.closed);
+  FileHeader h = new_file_header(src.origin(), F.root_lo, F.root_size, L, std::uint32_t(nt), prm, opt.page_target, R.closed);
   h.nodes = N;
   h.inner = S.inner;
   h.leaves = S.leaves;

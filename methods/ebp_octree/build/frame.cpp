@@ -12,6 +12,24 @@
 
 namespace ebp::detail {
 
+Vec3d choose_origin(const Box3d& b) {
+  if (!(b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z)) return {0, 0, 0};  // empty (or NaN)
+  const Vec3d centre = (b.lo + b.hi) * 0.5;
+  const Vec3d ext = b.extent();
+  double m = std::max({ext.x, ext.y, ext.z});
+  if (!std::isfinite(m)) return {0, 0, 0};  // the build refuses non-finite coordinates
+  // A single point (or a flat set of coincident vertices) has no size: its magnitude's 1e-6.
+  if (m == 0) m = 1e-6 * std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
+  if (m == 0) return {0, 0, 0};
+  const double g = std::ldexp(1.0, int(std::ceil(std::log2(m))) + 3);
+  Vec3d o;
+  for (int k = 0; k < 3; ++k) {
+    const double r = std::nearbyint(centre[k] / g);
+    o[k] = r == 0 ? 0.0 : r * g;  // never -0
+  }
+  return o;
+}
+
 void FrameAccumulator::add(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   bb.add(a); bb.add(b); bb.add(c);
   edge_sum += norm(b - a) + norm(c - b) + norm(a - c);

@@ -41,6 +41,8 @@ void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std:
   std::vector<Vec3d> geo;  // vertices of triangle ∩ cell polygons
   struct Cand { Vec3d n; double area; std::uint32_t t; };
   std::vector<Cand> cands;
+  geo.reserve(5 * n);  // a clipped triangle has 3-9 vertices, 3-5 typically: no regrowth
+  cands.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t t = tri[k];
     LeafTri& r = out[k];
@@ -123,6 +125,7 @@ void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std:
   // depend on their order, only on which exist).
   const LeafTri* blk = out;
   std::vector<Vec3d> verts;
+  verts.reserve(3 * std::size_t(lf.tri_count));
   {
     std::size_t cap = 16;
     while (cap < 6 * std::size_t(lf.tri_count)) cap <<= 1;

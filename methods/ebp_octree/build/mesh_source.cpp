@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "harness/io/mesh_reader.hpp"
+#include "methods/ebp_octree/build/build_parts.hpp"
 
 namespace ebp {
 
@@ -21,14 +22,19 @@ namespace {
 class MemorySource final : public TriangleSource {
  public:
   MemorySource(const std::vector<Vec3d>& v, const std::vector<std::array<std::uint32_t, 3>>& t) : v_(v), t_(t) {
-    vf_.reserve(3 * v_.size());
+    Box3d bounds;
     for (const Vec3d& p : v_) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
-      for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k]));
+      bounds.add(p);
     }
+    origin_ = detail::choose_origin(bounds);
+    vf_.reserve(3 * v_.size());
+    for (const Vec3d& p : v_)
+      for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k] - origin_[k]));
   }
   const float* float_vertices() const override { return vf_.data(); }
+  Vec3d origin() const override { return origin_; }
   std::uint64_t num_triangles() const override { return t_.size(); }
   std::uint64_t num_vertices() const override { return v_.size(); }
   void scan(const Chunk& f) override {
@@ -43,7 +49,7 @@ class MemorySource final : public TriangleSource {
           const std::uint32_t vi = t_[first + i][k];
           if (vi >= v_.size()) throw std::invalid_argument("ebp_octree: vertex index out of range");
           idx[3 * i + k] = vi;
-          for (int a = 0; a < 3; ++a) xyz[9 * i + 3 * k + a] = float(v_[vi][a]);
+          std::memcpy(&xyz[9 * i + 3 * std::size_t(k)], &vf_[3 * std::size_t(vi)], 3 * sizeof(float));
         }
       f(first, n, idx.data(), xyz.data());
     }
@@ -52,6 +58,7 @@ class MemorySource final : public TriangleSource {
 
  private:
   const std::vector<Vec3d>& v_;
+  Vec3d origin_;
   std::vector<float> vf_;
   const std::vector<std::array<std::uint32_t, 3>>& t_;
 };
@@ -62,12 +69,27 @@ class FileSource final : public TriangleSource {
  public:
   explicit FileSource(const std::string& path) : reader_(bvhbench::MeshReader::open(path)) {
     vf_.reserve(3 * std::size_t(reader_->num_vertices()));  // the header's count, checked against the file size
+    Box3d bounds;
     reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
-      for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t i = 0; i < n; ++i) {
+        bounds.add(v[i]);
         for (int k = 0; k < 3; ++k) vf_.push_back(float(v[i][k]));
+      }
     });
+    origin_ = detail::choose_origin(bounds);
+    if (origin_ != Vec3d(0, 0, 0)) {
+      // A model far from the origin: its vertices again, from a second reader (a reader delivers
+      // its vertices once), as float(v - origin). Holding doubles instead would cost 24 B a vertex.
+      reader_ = bvhbench::MeshReader::open(path);
+      std::size_t j = 0;
+      reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+        for (std::size_t i = 0; i < n && j + 3 <= vf_.size(); ++i)
+          for (int k = 0; k < 3; ++k) vf_[j++] = float(v[i][k] - origin_[k]);
+      });
+    }
     vf_.shrink_to_fit();
   }
+  Vec3d origin() const override { return origin_; }
   std::uint64_t num_triangles() const override { return reader_->num_triangles(); }
   std::uint64_t num_vertices() const override { return reader_->num_vertices(); }
   std::string sha256() const override { return reader_->sha256(); }
@@ -97,6 +119,7 @@ class FileSource final : public TriangleSource {
 
  private:
   std::unique_ptr<bvhbench::MeshReader> reader_;
+  Vec3d origin_;
   std::vector<float> vf_;
 };
 

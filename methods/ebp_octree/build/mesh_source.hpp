@@ -31,9 +31,12 @@ class TriangleSource {
   virtual void scan(const Chunk& f) = 0;
   /// sha256 of the file's bytes (after one complete scan); "" for meshes made in code.
   virtual std::string sha256() const { return ""; }
-  /// The vertices as float (x, y, z per vertex, 3 × num_vertices()), held by the source: the
-  /// sorted records carry vertex indices and the leaves read their coordinates here.
+  /// The vertices as float in the build's frame (x, y, z of v - origin() per vertex,
+  /// 3 × num_vertices()), held by the source: the sorted records carry vertex indices and the
+  /// leaves read their coordinates here; scan() hands out the same floats.
   virtual const float* float_vertices() const = 0;
+  /// The frame origin, choose_origin() of all the vertices' bounds (build_parts.hpp).
+  virtual Vec3d origin() const = 0;
   /// Memory the source holds (its float vertices, buffers, an STL's weld table).
   virtual std::size_t resident_bytes() const = 0;
   /// Whether the source streams a file (false: a mesh held in memory).
@@ -45,7 +48,9 @@ std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& ver
                                                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
 /// A mesh file in any format bvhbench reads (PLY with faces or strips, OBJ, STL, OFF), streamed
 /// through the harness's mesh reader (mesh_reader.hpp): the vertices read once and held as float
-/// (12 B each), the triangles re-read from the file at every scan. What the source holds besides
+/// (12 B each; read a second time, by a second reader, when the frame origin is not 0: the float
+/// coordinates are those of v - origin, which the first reading cannot know), the triangles
+/// re-read from the file at every scan. What the source holds besides
 /// (the reader's buffers; an STL's weld table, ≈ 20–28 B per vertex) is in resident_bytes().
 /// Throws InputError for a file the reader refuses (its vertices are read here; the faces'
 /// problems are found at the first scan).

@@ -78,14 +78,16 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
   T.num_triangles = std::uint32_t(tin.size());
   const std::size_t nt = tin.size();
 
-  // ---- 1. geometry in float (the structure's geometry), cube, leaf level ----
-  std::vector<Vec3d> V(vin.size());
-  for (std::size_t i = 0; i < vin.size(); ++i) {
-    const Vec3d& v = vin[i];
+  // ---- 1. geometry in float in the frame (the structure's geometry), cube, leaf level ----
+  Box3d vertex_bounds;
+  for (const Vec3d& v : vin) {
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
       throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");
-    V[i] = round_to_float(v);
+    vertex_bounds.add(v);
   }
+  T.origin = choose_origin(vertex_bounds);
+  std::vector<Vec3d> V(vin.size());
+  for (std::size_t i = 0; i < vin.size(); ++i) V[i] = round_to_float(vin[i] - T.origin);
   FrameAccumulator acc;
   for (const auto& t : tin) {
     for (int k = 0; k < 3; ++k)

@@ -8,6 +8,14 @@
 /// query.hpp). It depends on nothing of the harness but geometry.hpp, so that an out-of-core
 /// store can reuse it.
 ///
+/// The frame: every coordinate the structure holds (root_lo, cells, planes, leaf centres and
+/// reference points, LeafTri vertices) is relative to `origin`, a point chosen at build from the
+/// model's bounds (choose_origin, build_parts.hpp): 0 for a model near the origin, otherwise a
+/// coarse point near the model's centre, so that float coordinates keep the model's own precision
+/// however far it lies (a model 1e6 from the origin keeps ~1e-7 of its size, not 1/16 unit).
+/// Query (query.hpp) takes and answers points in this frame; the harness adapters (ebp_method.cpp)
+/// and OutOfCore translate the query point once, in double, and the closest point back.
+///
 /// Layout (all plain data, indices instead of pointers, so that the arrays can be written to a
 /// file and mapped back as they are):
 ///   nodes    : every node, sorted by octcode = pre-order; a subtree is a contiguous range
@@ -60,8 +68,9 @@ struct Plane {
 };
 static_assert(sizeof(Plane) == 16, "Plane is 16 bytes");
 
-/// One triangle reference in a leaf block. Coordinates are the input's, rounded to float (the
-/// structure's geometry); all exact predicates run on exactly these values.
+/// One triangle reference in a leaf block. Coordinates are the input's in the tree's frame
+/// (input - origin, in double), rounded to float (the structure's geometry); all exact predicates
+/// run on exactly these values.
 struct LeafTri {
   float a[3], b[3], c[3];
   float n[3];    ///< unit face normal (float); zero for slivers whose normal is ill-conditioned
@@ -105,6 +114,10 @@ class Octree {
                       const std::function<void(double)>& progress = nullptr);
 
   // --- the structure (read-only after build) ---
+  /// The frame origin (world = frame + origin); every other coordinate here is in the frame.
+  Vec3d origin{0, 0, 0};
+  Vec3d to_frame(const Vec3d& world) const { return world - origin; }
+  Vec3d to_world(const Vec3d& frame) const { return frame + origin; }
   Vec3d root_lo, root_centre;
   double root_size = 0;  ///< edge of the root cube
   int leaf_level = 0;

@@ -7,6 +7,7 @@
 ///   top nodes     : the tree above the pages, pre-order; TopNode kind `page` = a page root
 ///   top children  : 8 u32 per top inner node
 ///   top planes    : bounding planes of the top nodes (page roots included), root frame
+/// Every coordinate (root_lo, planes, vertices) is in the tree's frame: world - FileHeader::origin.
 ///   info          : UTF-8 JSON (build statistics, for `bvhbench ebp info`)
 ///   pages         : in octcode order, each a self-contained slice (PageHeader + arrays)
 ///   directory     : one PageEntry per page (offset, size, CRC-32C, parent code)
@@ -29,7 +30,8 @@
 namespace ebp {
 
 inline constexpr char kStoreMagic[8] = {'E', 'B', 'P', 'O', 'C', 'T', '\r', '\n'};
-inline constexpr std::uint32_t kStoreVersion = 1;
+/// 2: coordinates in the tree's frame (FileHeader::origin); version 1 stored world coordinates.
+inline constexpr std::uint32_t kStoreVersion = 2;
 inline constexpr std::uint32_t kPageMagic = 0x47504245u;  // "EBPG"
 inline constexpr std::uint64_t kPageAlign = 4096;
 inline constexpr std::uint64_t kMaxPageBytes = std::uint64_t(1) << 30;  ///< reader's limit per page
@@ -60,7 +62,10 @@ struct FileHeader {
   std::uint64_t file_size;
   Section top_nodes, top_children, top_planes, info, pages, directory;
   std::uint64_t flags;  ///< kStoreClosed (zero in files written before it existed)
-  std::uint8_t reserved[512 - 8 - 4 - 4 - 32 - 8 - 16 - 8 - 56 - 32 - 8 - 6 * 24 - 8 - 8];
+  /// The frame origin (Octree::origin): root_lo, planes and every float coordinate of the pages
+  /// are relative to it; a query point is translated by -origin once, in double.
+  double origin[3];
+  std::uint8_t reserved[512 - 8 - 4 - 4 - 32 - 8 - 16 - 8 - 56 - 32 - 8 - 6 * 24 - 8 - 24 - 8];
   std::uint32_t header_crc;  ///< CRC-32C of the header with this field zero
   std::uint32_t pad;
 };

@@ -25,6 +25,7 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
   top_ = store_->top_nodes().data();
   top_children_ = store_->top_children().data();
   top_planes_ = store_->top_planes().data();
+  origin_ = Vec3d(h.origin[0], h.origin[1], h.origin[2]);
   root_lo_ = Vec3d(h.root_lo[0], h.root_lo[1], h.root_lo[2]);
   root_size_ = h.root_size;
   root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;  // as Octree::build computes it
@@ -59,7 +60,7 @@ std::size_t OutOfCore::bytes() const {
          cache_.resident_bytes();
 }
 
-bool OutOfCore::inside(const Vec3d& p) {
+bool OutOfCore::inside_frame(const Vec3d& p) {
   // Same arithmetic as Query::locate.
   const int L = leaf_level_;
   const double inv = double(std::uint64_t(1) << L) / root_size_;
@@ -131,6 +132,12 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
 }
 
 DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
+  DistanceAnswer r = unsigned_distance_frame(p - origin_);
+  r.closest = r.closest + origin_;
+  return r;
+}
+
+DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
   const std::uint64_t qid = ++query_id_;
   Best bst;
   auto visit_page = [&](std::uint32_t id) {
@@ -208,8 +215,10 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
 }
 
 DistanceAnswer OutOfCore::distance(const Vec3d& p) {
-  DistanceAnswer r = unsigned_distance(p);
-  if (inside(p)) r.distance = -r.distance;
+  const Vec3d q = p - origin_;
+  DistanceAnswer r = unsigned_distance_frame(q);
+  r.closest = r.closest + origin_;
+  if (inside_frame(q)) r.distance = -r.distance;
   return r;
 }
 

@@ -20,7 +20,9 @@ class OutOfCore {
   /// Opens the store (throws bvhbench::InputError on a bad file). `cold`: evict the file from
   /// the OS page cache now and at every reset_path(), and start each path with an empty cache.
   OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold);
-  bool inside(const Vec3d& p);
+  /// Points and closest points in world coordinates (translated once, in double, by the store's
+  /// frame origin; FileHeader::origin).
+  bool inside(const Vec3d& p) { return inside_frame(p - origin_); }
   DistanceAnswer distance(const Vec3d& p);
   DistanceAnswer unsigned_distance(const Vec3d& p);
   void reset_path();
@@ -39,7 +41,7 @@ class OutOfCore {
   const TopNode* top_;
   const std::uint32_t* top_children_;
   const Plane* top_planes_;
-  Vec3d root_lo_, root_centre_;
+  Vec3d origin_, root_lo_, root_centre_;
   double root_size_;
   int leaf_level_;
   QueryCounters top_counters_;
@@ -49,6 +51,9 @@ class OutOfCore {
   std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX, last_leaf_ = UINT32_MAX, last_node_ = UINT32_MAX;
 
   struct Best;
+  // The queries in the tree's frame.
+  bool inside_frame(const Vec3d& p);
+  DistanceAnswer unsigned_distance_frame(const Vec3d& p);
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
 };
 

@@ -188,6 +188,7 @@ std::unique_ptr<Page> decode_page(const std::uint8_t* data, std::size_t size, co
     d.kind = NodeKind::white;
     d.next = dummy + 1;
   }
+  T.origin = c.origin;
   T.root_lo = c.root_lo;
   T.root_size = c.root_size;
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;

@@ -59,6 +59,7 @@ struct PageContext {
   std::uint8_t octants = 0;    ///< the octants of its roots in that parent (root page: 1)
   int leaf_level = 0;
   std::uint32_t num_triangles = 0;  ///< of the input mesh
+  Vec3d origin;  ///< the frame origin (every coordinate of the page is relative to it)
   Vec3d root_lo;
   double root_size = 0;
   bool closed = false;

@@ -86,6 +86,9 @@ void StoreReader::open_and_check() {
     fail("truncated: " + std::to_string(file_size_) + " bytes, smaller than the 512-byte header");
   read_at(0, &h_, sizeof h_);
   if (std::memcmp(h_.magic, kStoreMagic, 8) != 0) fail("not an EBP-Octree store (bad magic)");
+  if (h_.version == 1)
+    fail("store format version 1 (world coordinates), written by an older bvhbench; this build reads version " +
+         std::to_string(kStoreVersion) + " (coordinates relative to a frame origin): rebuild it with `bvhbench ebp build`");
   if (h_.version != kStoreVersion)
     fail("unsupported store version " + std::to_string(h_.version) + " (this build reads version " +
          std::to_string(kStoreVersion) + ")");
@@ -102,6 +105,8 @@ void StoreReader::open_and_check() {
   if (!(std::isfinite(h_.root_lo[0]) && std::isfinite(h_.root_lo[1]) && std::isfinite(h_.root_lo[2]) &&
         std::isfinite(h_.root_size) && h_.root_size > 0))
     fail("bad bounding cube");
+  if (!(std::isfinite(h_.origin[0]) && std::isfinite(h_.origin[1]) && std::isfinite(h_.origin[2])))
+    fail("bad frame origin");
   if (h_.num_triangles == 0) fail("no triangles");
   if (h_.flags & ~kStoreClosed) fail("unknown header flags");
   if (h_.num_pages == 0 || h_.num_pages > 0xffffffffull) fail("bad page count " + std::to_string(h_.num_pages));
@@ -224,6 +229,7 @@ PageContext StoreReader::page_context(std::uint32_t id) const {
   c.octants = page_octants_[id];
   c.leaf_level = int(h_.leaf_level);
   c.num_triangles = h_.num_triangles;
+  c.origin = Vec3d(h_.origin[0], h_.origin[1], h_.origin[2]);
   c.root_lo = Vec3d(h_.root_lo[0], h_.root_lo[1], h_.root_lo[2]);
   c.root_size = h_.root_size;
   c.closed = (h_.flags & kStoreClosed) != 0;
@@ -232,6 +238,7 @@ PageContext StoreReader::page_context(std::uint32_t id) const {
 
 Octree StoreReader::load_all() const {
   Octree T;
+  T.origin = Vec3d(h_.origin[0], h_.origin[1], h_.origin[2]);
   T.root_lo = Vec3d(h_.root_lo[0], h_.root_lo[1], h_.root_lo[2]);
   T.root_size = h_.root_size;
   T.root_centre = T.root_lo + Vec3d(0.5, 0.5, 0.5) * T.root_size;

@@ -8,13 +8,16 @@
 
 namespace ebp {
 
-FileHeader new_file_header(const Vec3d& root_lo, double root_size, int leaf_level, std::uint32_t num_triangles,
+FileHeader new_file_header(const Vec3d& origin, const Vec3d& root_lo, double root_size, int leaf_level, std::uint32_t num_triangles,
                            const BuildParams& params, std::size_t page_target, bool closed) {
   FileHeader h{};
   std::memcpy(h.magic, kStoreMagic, 8);
   h.version = kStoreVersion;
   h.header_size = sizeof(FileHeader);
-  for (int k = 0; k < 3; ++k) h.root_lo[k] = root_lo[k];
+  for (int k = 0; k < 3; ++k) {
+    h.origin[k] = origin[k];
+    h.root_lo[k] = root_lo[k];
+  }
   h.root_size = root_size;
   h.leaf_level = std::uint32_t(leaf_level);
   h.num_triangles = num_triangles;

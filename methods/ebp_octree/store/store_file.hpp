@@ -11,10 +11,10 @@
 
 namespace ebp {
 
-/// A header with magic, version, size, frame (root_lo, root_size, leaf_level), the input's
+/// A header with magic, version, size, frame (origin, root_lo, root_size, leaf_level), the input's
 /// triangle count, the build parameters, the page target (at least 4096) and the closed flag;
 /// every count, section and the checksum zero, for the writer to fill.
-FileHeader new_file_header(const Vec3d& root_lo, double root_size, int leaf_level, std::uint32_t num_triangles,
+FileHeader new_file_header(const Vec3d& origin, const Vec3d& root_lo, double root_size, int leaf_level, std::uint32_t num_triangles,
                            const BuildParams& params, std::size_t page_target, bool closed);
 
 /// Writes `n` bytes at `*off` as section `*s` (offset, size, CRC-32C), then moves `*off` to the

@@ -160,7 +160,7 @@ void write_store_atomic(const Octree& t, const std::string& path, const StoreWri
   const Plan P = plan_pages(t, std::max<std::size_t>(opt.page_target, 4096));
   bvhbench::AtomicOutputFile f(path);
 
-  FileHeader h = new_file_header(t.root_lo, t.root_size, t.leaf_level, t.num_triangles, opt.params,
+  FileHeader h = new_file_header(t.origin, t.root_lo, t.root_size, t.leaf_level, t.num_triangles, opt.params,
                                  opt.page_target, t.closed);
   h.nodes = t.nodes.size();
   h.leaves = t.leaves.size();

@@ -113,6 +113,7 @@ void check_same(const bvhbench::Mesh& m, const std::string& name, std::size_t pa
 
   StoreReader a(mem), b(ext);
   const FileHeader &ha = a.header(), &hb = b.header();
+  EXPECT_EQ(std::memcmp(ha.origin, hb.origin, sizeof ha.origin), 0) << name;
   EXPECT_EQ(std::memcmp(ha.root_lo, hb.root_lo, sizeof ha.root_lo), 0) << name;
   EXPECT_TRUE(bits_eq(ha.root_size, hb.root_size)) << name;
   EXPECT_EQ(ha.leaf_level, hb.leaf_level) << name;
