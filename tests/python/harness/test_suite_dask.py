@@ -99,14 +99,14 @@ def dask_suite(suite: Path, out: Path, *extra, timeout=300):
 
 def comparable(r):
     """What must not depend on the executor: the job (less the paths of files in OUT/data), its
-    status, counters, accuracy and structure (less its timings)."""
+    status, counters, accuracy and structure (less its timings and allocation sizes)."""
     job = json.loads(json.dumps(r["job"]))
     job.pop("truth", None)
     job["queries"].pop("path", None)
     accuracy = dict(r.get("accuracy") or {})
     accuracy.pop("truth", None)
     return {"job": job, "status": r["status"], "counters": r.get("counters"), "accuracy": accuracy,
-            "structure": {k: v for k, v in (r.get("structure") or {}).items() if "seconds" not in k}}
+            "structure": {k: v for k, v in (r.get("structure") or {}).items() if "seconds" not in k and k != "bytes"}}
 
 
 def small_suite(path: Path):
