@@ -168,7 +168,8 @@ def paper_rows(rs):
     hosts = job_hosts(jobs)
     out = []
     for host, mesh in [(h, m) for h in hosts for m in rs.meshes(jobs)]:
-        on_mesh = [j for j in jobs if j.mesh == mesh and (len(hosts) == 1 or (j.get("context.host") or "") == host)]
+        on_mesh = [j for j in jobs if j.mesh == mesh
+                   and (len(hosts) == 1 or (j.get("context.host") or "") == host)]
         for method, key in configs:
             js = [j for j in on_mesh if j.method == method and j.params_key == key]
             if not js:
@@ -213,8 +214,9 @@ def paper_tables(rs):
     rows = paper_rows(rs)
     by_host = len({r["host"] for r in rows}) > 1
     host_cell = (lambda r: [r["host"] or "?"]) if by_host else (lambda r: [])
-    main_h = (["Host"] if by_host else []) + ["Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
-              "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
+    main_h = (["Host"] if by_host else []) + [
+        "Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
+        "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
     main, bold = [], []
     for r in rows:
         if r["method"] == STAR:
@@ -225,12 +227,14 @@ def paper_tables(rs):
                      fmt.nbytes(r["file_bytes"]), _rate_cell(r, "pis_random"),
                      _rate_cell(r, "pis_haptic"), _rate_cell(r, "dist_haptic")])
     p = PAPER_REFERENCE
-    main.append((["–"] if by_host else []) + ["Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
-                 p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
-                 fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
+    main.append((["–"] if by_host else []) + [
+        "Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
+        p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
+        fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
 
-    ratio_h = (["Host"] if by_host else []) + ["Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
-               "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
+    ratio_h = (["Host"] if by_host else []) + [
+        "Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
+        "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
     ratios = []
     by_mesh = {}
     for r in rows:

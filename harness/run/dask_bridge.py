@@ -47,6 +47,7 @@ import queue
 import sys
 import threading
 import time
+import uuid
 from collections import deque
 
 #: How often the live workers are listed (seconds): how soon a lost worker is noticed.
@@ -198,6 +199,8 @@ class Bridge:
         self.groups = {}
         self.live = set()
         self.live_checked = 0.0
+        # Task keys are unique per run: runners on several machines may share one scheduler.
+        self.session = uuid.uuid4().hex[:12]
 
     # -- workers --------------------------------------------------------------------------
     def refresh_workers(self, force=False):
@@ -238,7 +241,7 @@ class Bridge:
             job.worker = g.worker
             job.future = self.client.submit(
                 run_job_on_worker, m["exe"], m["args"], m["inputs"], m["timeout_s"],
-                m["memory_limit_mb"], key=f"bvhbench-{m['id']}-{len(job.lost_on)}-{os.getpid()}",
+                m["memory_limit_mb"], key=f"bvhbench-{m['id']}-{len(job.lost_on)}-{self.session}",
                 workers=[g.worker], allow_other_workers=False, pure=False, retries=0)
             g.running = job
 

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -36,6 +37,9 @@ std::string env_or(const char* name, const std::string& fallback) {
 
 /// How long a blocking wait sleeps between looks at interrupted(), in milliseconds.
 constexpr int kInterruptPollMs = 200;
+/// How long the bridge may take to close its cluster before it is killed (its local workers
+/// end with it), in seconds.
+constexpr double kCloseSeconds = 60;
 
 }  // namespace
 
@@ -134,7 +138,12 @@ DaskJobExecutor::~DaskJobExecutor() {
   }
   if (to_bridge_ >= 0) close(to_bridge_);
   // The bridge closes its cluster and exits; its last messages are of no use now.
-  while (!eof_) read_message(kInterruptPollMs);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kCloseSeconds);
+  while (!eof_ && std::chrono::steady_clock::now() < deadline) read_message(kInterruptPollMs);
+  if (!eof_) {
+    std::cerr << "suite: the Dask bridge did not close its cluster in " << kCloseSeconds << " s; killed\n";
+    kill(-pid_, SIGKILL);
+  }
   close(from_bridge_);
   waitpid(pid_, nullptr, 0);
 }
@@ -252,6 +261,12 @@ std::optional<JobFinished> DaskJobExecutor::collect() {
     if (m) {
       if (std::optional<JobFinished> f = finish(*m)) return f;
       continue;
+    }
+    if (eof_ && stop_sent_) {
+      // Stopped, and gone before it said so of every job: the rest are unfinished all the same.
+      JobFinished f{std::move(tasks_.begin()->second), json(), false};
+      tasks_.erase(tasks_.begin());
+      return f;
     }
     if (eof_) {
       int st = 0;

@@ -1,8 +1,8 @@
 #pragma once
 /// How the suite runner (suite_runner.hpp) has its jobs executed: the seam between the loop
 /// (which jobs, in which order, --resume, the runs/ layout, summary.csv) and where a job runs.
-/// LocalJobExecutor (local_job_executor.hpp) runs each in a child process on this machine; an
-/// executor that runs them on other workers (a Dask cluster) implements the same interface.
+/// LocalJobExecutor (local_job_executor.hpp) runs each in a child process on this machine;
+/// DaskJobExecutor (dask_job_executor.hpp) on the workers of a Dask cluster.
 ///
 /// What an executor must do:
 /// - run each submitted job as `bvhbench run` with the task's arguments in its own child process
