@@ -339,8 +339,11 @@ def start_client(args):
     n = args.workers or os.cpu_count() or 1
     # One thread per worker: a worker runs one job at a time. No memory limit on the worker:
     # each job has its own (RLIMIT_AS), and the jobs are children the nanny would not count.
+    # The dashboard (and the scheduler's HTTP routes) on a free port of loopback: never a clash
+    # with another cluster's 8787.
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None, memory_limit=0, silence_logs=logging.ERROR)
+                           dashboard_address="127.0.0.1:0", memory_limit=0,
+                           silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
@@ -372,7 +375,7 @@ def main(argv=None):
         bridge = Bridge(client, proto)
         bridge.refresh_workers(force=True)
         proto.emit(event="ready", scheduler=client.scheduler.address, workers=len(bridge.live),
-                   dashboard=client.dashboard_link if cluster is None else "")
+                   dashboard=client.dashboard_link)
         if not bridge.live:
             proto.emit(event="note", message="no Dask worker yet: the jobs wait for one")
         commands = queue.Queue()
