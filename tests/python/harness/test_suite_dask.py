@@ -92,6 +92,13 @@ def cluster(tmp_path):
     c.close()
 
 
+def start_dask_suite(suite: Path, out: Path, cluster):
+    """The suite started on `cluster`, not waited for."""
+    return subprocess.Popen([str(EXE), "--quiet", "suite", str(suite), "--out", str(out), "--executor", "dask",
+                             "--scheduler", cluster.address], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=ENV)
+
+
 def dask_suite(suite: Path, out: Path, *extra, timeout=300):
     return subprocess.run([str(EXE), "--quiet", "suite", str(suite), "--out", str(out), "--executor", "dask",
                            *extra], capture_output=True, text=True, timeout=timeout, env=ENV)
@@ -134,10 +141,11 @@ matrices:
 def test_local_dask_cluster_gives_the_local_executors_results(tmp_path):
     suite = small_suite(tmp_path / "same.yml")
     local, dask = tmp_path / "local", tmp_path / "dask"
-    p = run_suite(suite, local)
+    data = ("--data", str(tmp_path / "data"))  # query sets and oracles made once, for both
+    p = run_suite(suite, local, *data)
     assert p.returncode in (0, 1), p.stderr
     # No --scheduler: the bridge starts a local cluster of two workers.
-    p = dask_suite(suite, dask, "--dask-workers", "2")
+    p = dask_suite(suite, dask, "--dask-workers", "2", *data)
     assert p.returncode in (0, 1), p.stderr
     a, b = results(local), results(dask)
     assert sorted(a) == sorted(b) == sorted(job_ids(suite))
@@ -187,9 +195,7 @@ def test_a_lost_worker_costs_one_retry_then_a_status_row_and_nothing_finished(tm
     ids = job_ids(suite)
     hang_id = next(i for i in ids if "fault" in i)
     out = tmp_path / "out"
-    proc = subprocess.Popen([str(EXE), "--quiet", "suite", str(suite), "--out", str(out), "--executor", "dask",
-                             "--scheduler", cluster.address], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=ENV)
+    proc = start_dask_suite(suite, out, cluster)
     try:
         first = worker_running(cluster, out, "fault")
         cluster.workers[first].kill()                        # lost mid-job ...
@@ -223,9 +229,7 @@ def test_interrupted_dask_run_resumes_without_loss_or_rework(tmp_path, cluster):
     ids = job_ids(suite)
     hang_id = next(i for i in ids if "fault" in i)
     out = tmp_path / "out"
-    proc = subprocess.Popen([str(EXE), "--quiet", "suite", str(suite), "--out", str(out), "--executor", "dask",
-                             "--scheduler", cluster.address], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=ENV)
+    proc = start_dask_suite(suite, out, cluster)
     worker_running(cluster, out, "fault")
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
