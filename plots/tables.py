@@ -154,13 +154,22 @@ RATE_COLUMNS = [("pis_random", "inside", "random"), ("pis_haptic", "inside", "ha
                 ("dist_haptic", "distance", "haptic")]
 
 
+def job_hosts(jobs):
+    """The hosts the jobs ran on, sorted ('' for a result that names none)."""
+    return sorted({j.get("context.host") or "" for j in jobs})
+
+
 def paper_rows(rs):
-    """Per model and method: the figures of the paper's tables, as numbers (None = absent)."""
+    """Per model and method: the figures of the paper's tables, as numbers (None = absent).
+    When the jobs ran on several hosts (a suite on a cluster), per host, model and method: a
+    rate is a median over one machine only, and each row names its "host"."""
     jobs = rs.model_jobs()
     configs = shown_configs(jobs)
+    hosts = job_hosts(jobs)
     out = []
-    for mesh in rs.meshes(jobs):
-        on_mesh = [j for j in jobs if j.mesh == mesh]
+    for host, mesh in [(h, m) for h in hosts for m in rs.meshes(jobs)]:
+        on_mesh = [j for j in jobs if j.mesh == mesh
+                   and (len(hosts) == 1 or (j.get("context.host") or "") == host)]
         for method, key in configs:
             js = [j for j in on_mesh if j.method == method and j.params_key == key]
             if not js:
@@ -172,7 +181,7 @@ def paper_rows(rs):
                 levels = next((j.get("structure.max_depth") for j in ok
                                if j.get("structure.max_depth") is not None), None)
             row = {
-                "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
+                "host": host, "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
                 "config": js[0].config, "coherent": is_coherent(key), "levels": levels,
                 "build_s": median(j.build_seconds for j in ok),
                 "structure_bytes": median(j.structure_bytes for j in ok),
@@ -199,31 +208,38 @@ def _ratio(a, b):
 
 
 def paper_tables(rs):
-    """(main, ratios): two (header, rows, bold_row_indices) tables."""
+    """(main, ratios): two (header, rows, bold_row_indices) tables. When the jobs ran on several
+    hosts, both begin with a "Host" column and a ratio pairs the EBP-Octree and a peer of one
+    host only (ratios are never taken across machines)."""
     rows = paper_rows(rs)
-    main_h = ["Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
-              "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
+    by_host = len({r["host"] for r in rows}) > 1
+    host_cell = (lambda r: [r["host"] or "?"]) if by_host else (lambda r: [])
+    main_h = (["Host"] if by_host else []) + [
+        "Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
+        "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
     main, bold = [], []
     for r in rows:
         if r["method"] == STAR:
             bold.append(len(main))
-        main.append([r["mesh"], fmt.count(r["triangles"]), r["config"],
+        main.append(host_cell(r) + [r["mesh"], fmt.count(r["triangles"]), r["config"],
                      r["levels"] if r["levels"] is not None else "–",
                      fmt.seconds(r["build_s"]), fmt.nbytes(r["structure_bytes"]),
                      fmt.nbytes(r["file_bytes"]), _rate_cell(r, "pis_random"),
                      _rate_cell(r, "pis_haptic"), _rate_cell(r, "dist_haptic")])
     p = PAPER_REFERENCE
-    main.append(["Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
-                 p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
-                 fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
+    main.append((["–"] if by_host else []) + [
+        "Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
+        p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
+        fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
 
-    ratio_h = ["Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
-               "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
+    ratio_h = (["Host"] if by_host else []) + [
+        "Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
+        "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
     ratios = []
     by_mesh = {}
     for r in rows:
-        by_mesh.setdefault(r["mesh"], []).append(r)
-    for mesh, rs_ in by_mesh.items():
+        by_mesh.setdefault((r["host"], r["mesh"]), []).append(r)
+    for (_, mesh), rs_ in by_mesh.items():
         stars = [r for r in rs_ if r["method"] == STAR]
         if not stars:
             continue
@@ -233,7 +249,7 @@ def paper_tables(rs):
             # A path-coherent peer is compared with the EBP-Octree's coherent variant when the
             # suite ran one (same coherence on both sides), otherwise with its default.
             star = next((s for s in stars if s["coherent"] == r["coherent"]), stars[0])
-            ratios.append([mesh, fmt.count(r["triangles"]), r["config"],
+            ratios.append(host_cell(r) + [mesh, fmt.count(r["triangles"]), r["config"],
                            fmt.ratio(_ratio(star["pis_random"], r["pis_random"])),
                            fmt.ratio(_ratio(star["pis_haptic"], r["pis_haptic"])),
                            fmt.ratio(_ratio(star["dist_haptic"], r["dist_haptic"])),

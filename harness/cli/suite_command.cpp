@@ -1,6 +1,7 @@
 // `bvhbench suite SUITE.yml --out results/NAME`: the command's options. The suite file is read
-// by run/suite.hpp, run by run/suite_runner.hpp, each job in its own child process
-// (run/local_job_executor.hpp).
+// by run/suite.hpp, run by run/suite_runner.hpp, each job in its own child process: on this
+// machine (run/local_job_executor.hpp) or on the workers of a Dask cluster
+// (run/dask_job_executor.hpp).
 #include <iostream>
 #include <memory>
 #include <regex>
@@ -11,6 +12,7 @@
 
 #include "harness/cli/commands.hpp"
 #include "harness/run/child_process.hpp"
+#include "harness/run/dask_job_executor.hpp"
 #include "harness/run/local_job_executor.hpp"
 #include "harness/run/suite.hpp"
 #include "harness/run/suite_runner.hpp"
@@ -19,11 +21,13 @@
 namespace bvhbench {
 
 // ---------------------------------------------------------------------------------------------
-// `bvhbench suite SUITE.yml --out results/NAME [--resume] [--filter REGEX]`
+// `bvhbench suite SUITE.yml --out results/NAME [--resume] [--filter REGEX]
+//                  [--executor local|dask [--scheduler ADDRESS]]`
 // ---------------------------------------------------------------------------------------------
 void add_suite_command(CLI::App& app) {
   struct Opts {
-    std::string file, out, filter, data_dir;
+    std::string file, out, filter, data_dir, executor = "local", scheduler, worker_exe;
+    int dask_workers = 0;
     bool resume = false, list = false, no_truth = false;
     double timeout_s = -1, memory_limit_mb = -1;
     int repeat = -1;
@@ -43,7 +47,21 @@ void add_suite_command(CLI::App& app) {
   cmd->add_option("--repeat", o->repeat, "Timed passes per job (overrides the suite)");
   cmd->add_flag("--no-truth", o->no_truth, "Do not compute or attach oracle answers");
   cmd->add_option("--data", o->data_dir, "Cache for query sets and oracle files (default: OUT/data)");
+  cmd->add_option("--executor", o->executor,
+                  "Where the jobs run: local (here, one at a time) or dask (on a Dask cluster; docs/dask.md)")
+      ->check(CLI::IsMember({"local", "dask"}));
+  cmd->add_option("--scheduler", o->scheduler,
+                  "With --executor dask: a running Dask scheduler (tcp://HOST:PORT); default: a local cluster here");
+  cmd->add_option("--dask-workers", o->dask_workers,
+                  "With --executor dask and no --scheduler: workers of the local cluster (default: one per core)")
+      ->check(CLI::Range(1, 4096));
+  cmd->add_option("--worker-exe", o->worker_exe,
+                  "With --executor dask: the bvhbench the workers run (default: this program's path)");
   cmd->callback([o] {
+    if (o->executor != "dask" && (!o->scheduler.empty() || o->dask_workers > 0 || !o->worker_exe.empty()))
+      throw InputError("--scheduler, --dask-workers and --worker-exe need --executor dask");
+    if (!o->scheduler.empty() && o->dask_workers > 0)
+      throw InputError("--dask-workers sizes the local cluster; a cluster at --scheduler has its own workers");
     SuiteConfig cfg = load_suite(o->file);
     if (o->timeout_s > 0) cfg.timeout_s = o->timeout_s;
     if (o->memory_limit_mb >= 0) cfg.memory_limit_mb = o->memory_limit_mb;
@@ -66,8 +84,14 @@ void add_suite_command(CLI::App& app) {
     run.out = o->out;
     run.data_dir = o->data_dir;
     run.resume = o->resume;
-    LocalJobExecutor executor(self_exe());
-    if (run_suite(cfg, jobs, run, executor).interrupted) throw ExitCode{130};
+    std::unique_ptr<JobExecutor> executor;
+    if (o->executor == "dask")
+      executor = std::make_unique<DaskJobExecutor>(DaskOptions{o->scheduler, o->dask_workers, o->worker_exe, "", ""});
+    else
+      executor = std::make_unique<LocalJobExecutor>(self_exe());
+    const bool interrupted = run_suite(cfg, jobs, run, *executor).interrupted;
+    executor.reset();  // a cluster is closed before the command ends
+    if (interrupted) throw ExitCode{130};
   });
 }
 

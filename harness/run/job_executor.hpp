@@ -1,8 +1,8 @@
 #pragma once
 /// How the suite runner (suite_runner.hpp) has its jobs executed: the seam between the loop
 /// (which jobs, in which order, --resume, the runs/ layout, summary.csv) and where a job runs.
-/// LocalJobExecutor (local_job_executor.hpp) runs each in a child process on this machine; an
-/// executor that runs them on other workers (a Dask cluster) implements the same interface.
+/// LocalJobExecutor (local_job_executor.hpp) runs each in a child process on this machine;
+/// DaskJobExecutor (dask_job_executor.hpp) on the workers of a Dask cluster.
 ///
 /// What an executor must do:
 /// - run each submitted job as `bvhbench run` with the task's arguments in its own child process
@@ -56,6 +56,9 @@ class JobExecutor {
   virtual void submit(JobTask task) = 0;
   /// Waits for a submitted job to end and returns it (in any order); nullopt when none is left.
   virtual std::optional<JobFinished> collect() = 0;
+  /// A submitted job that has already ended, without waiting; nullopt when none has. An executor
+  /// that runs jobs one at a time inside collect() has none (the default).
+  virtual std::optional<JobFinished> collect_ready() { return std::nullopt; }
   /// Jobs submitted and not yet collected.
   virtual std::size_t pending() const = 0;
 };
@@ -63,6 +66,10 @@ class JobExecutor {
 /// Reads the result file at `path` into `out`: false when it is missing, not JSON, or not an
 /// object with a status (a job's half-written or foreign file is no result).
 bool read_result_file(const std::string& path, nlohmann::json* out);
+
+/// The arguments of `bvhbench run` for a job, after the program name and before `--out`
+/// (an executor that runs the job elsewhere adds the result path it has there).
+std::vector<std::string> run_arguments(const JobSpec& spec);
 
 /// The `bvhbench run` command line of a task (args[0] = `exe`), writing its result to
 /// task.child_result_path.

@@ -53,12 +53,17 @@ ChildStatus child_status(const ChildOutcome& o, double timeout_s) {
   return s;
 }
 
-json status_row(const JobSpec& spec, const JobPlan& plan, const ChildOutcome& o, double timeout_s) {
-  const ChildStatus s = child_status(o, timeout_s);
-  json r = make_result(spec, s.code, s.message);
+json job_failure_row(const JobSpec& spec, const JobPlan& plan, const std::string& code, const std::string& message) {
+  json r = make_result(spec, code, message);
   r["job"]["id"] = plan.id;
   r["job"]["mesh"]["name"] = plan.mesh.name;
   set_planned_queries(r, plan.queries, true);
+  return r;
+}
+
+json status_row(const JobSpec& spec, const JobPlan& plan, const ChildOutcome& o, double timeout_s) {
+  const ChildStatus s = child_status(o, timeout_s);
+  json r = job_failure_row(spec, plan, s.code, s.message);
   r["elapsed_seconds"] = o.seconds;
   return r;
 }

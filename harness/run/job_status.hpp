@@ -25,6 +25,11 @@ struct ChildStatus {
 /// ended and ends with the last 500 bytes of its output.
 ChildStatus child_status(const ChildOutcome& outcome, double timeout_s);
 
+/// The row of a job that left no result of its own, with status `code` and `message`: the plan's
+/// id, mesh name and planned query set (n and seed, or the points file's path).
+nlohmann::json job_failure_row(const JobSpec& spec, const JobPlan& plan, const std::string& code,
+                               const std::string& message);
+
 /// The row of a job whose child left no result file: child_status() with the plan's id, mesh
 /// name and planned query set, and the child's elapsed_seconds.
 nlohmann::json status_row(const JobSpec& spec, const JobPlan& plan, const ChildOutcome& outcome,

@@ -108,20 +108,30 @@ SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
     ++finished;
     spent += seconds_since(started[i]);
     started.erase(i);
-    double left = spent / double(finished) * double(to_run > finished ? to_run - finished : 0);
+    // Jobs that run side by side (on several workers) overlap: then the rate is the wall clock's.
+    const double per_job = executor.slots() > 1 ? seconds_since(t_start) / double(finished) : spent / double(finished);
+    double left = per_job * double(to_run > finished ? to_run - finished : 0);
     std::cerr << "[" << (i + 1) << "/" << jobs.size() << "] " << j.id << ": " << short_result(result)
               << "  (elapsed " << format_seconds(seconds_since(t_start)) << ", left ~" << format_seconds(left) << ")\n";
   };
   // Records a job the executor finished; false when an interrupt stopped it.
-  auto collect_one = [&] {
-    std::optional<JobFinished> f = executor.collect();
-    if (!f) return true;
-    if (!f->kept) {
-      std::remove(f->task.child_result_path.c_str());
+  auto record_finished = [&](JobFinished& f) {
+    if (!f.kept) {
+      std::remove(f.task.child_result_path.c_str());
       return false;
     }
-    record(f->task.index, std::move(f->result));
+    record(f.task.index, std::move(f.result));
     return true;
+  };
+  auto collect_one = [&] {
+    std::optional<JobFinished> f = executor.collect();
+    return f ? record_finished(*f) : true;
+  };
+  // Records, without waiting, the jobs that ended while this one was prepared.
+  auto collect_ended = [&] {
+    bool kept = true;
+    while (std::optional<JobFinished> f = executor.collect_ready()) kept = record_finished(*f) && kept;
+    return kept;
   };
 
   bool stopped = false;
@@ -168,6 +178,7 @@ SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
     std::remove(result_path(j).c_str());
     std::remove(task.child_result_path.c_str());
     executor.submit(std::move(task));
+    stopped = !collect_ended();
     while (!stopped && executor.pending() >= executor.slots()) stopped = !collect_one();
   }
   // What is still running: recorded as it ends (an interrupt drops what it stopped).

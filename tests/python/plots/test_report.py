@@ -313,3 +313,29 @@ def test_non_finite_distances_are_wrong_answers():
                           "accuracy": {"distance": {"rel_error": {"max": 0.0, "p99": 0.0},
                                                     "sign_wrong": 0, "non_finite": 3}}}, "m.json")
     assert tables.accuracy_problems(job) == ["3 non-finite distances (NaN or infinite)"]
+
+
+def test_ratios_are_never_taken_across_hosts(tmp_path):
+    """A suite run on a cluster: cgal_aabb's cow jobs on one host, everything else on another.
+    The tables get a Host column; cgal_aabb on cow has its rates on its host but no ratio (no
+    EBP-Octree ran there), and the other peers keep their same-host ratios."""
+    import tables
+    results = tmp_path / "results_small"
+    shutil.copytree(FIXTURE, results, ignore=shutil.ignore_patterns("*.py"))
+    for f in (results / "runs").glob("*.json"):
+        r = json.loads(f.read_text(encoding="utf-8"))
+        apart = r["job"]["mesh"]["name"] == "cow" and r["job"]["method"] == "cgal_aabb"
+        r["context"]["host"] = "node-b" if apart else "node-a"
+        f.write_text(json.dumps(r), encoding="utf-8")
+    (mh, mrows, _), (rh, rrows, _) = tables.paper_tables(results_io.load(str(results)))
+    assert mh[0] == "Host" and rh[0] == "Host"
+    assert any(r[:4] == ["node-b", "cow", "5.8k", "cgal_aabb"] for r in mrows)
+    assert not any(r[1] == "cow" and r[3] == "cgal_aabb" for r in rrows)
+    assert all(r[0] == "node-a" for r in rrows)
+    embree = qps("cow__random-n500-s1__inside__ebp_octree") / qps("cow__random-n500-s1__inside__embree")
+    assert next(r for r in rrows if r[1:4] == ["cow", "5.8k", "embree"])[4] == fmt.ratio(embree)
+    import report as report_py   # the tables only: the charts are the other tests'
+    report_py.build_paper(results_io.load(str(results)), str(tmp_path))
+    md = read(tmp_path / "paper_table.md")
+    assert "| Host | Model |" in md and "| node-b | cow | 5.8k | cgal_aabb |" in md
+    assert r"\begin{tabular}{llll" in read(tmp_path / "paper_table.tex")
