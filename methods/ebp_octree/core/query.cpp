@@ -24,6 +24,7 @@ void Query::reset_path() {
   last_leaf_ = UINT32_MAX;
   last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
+  near_.valid = false;
 }
 
 }  // namespace ebp

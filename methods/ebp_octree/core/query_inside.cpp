@@ -169,6 +169,7 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
   const __m128 SLO = _mm_setr_ps(f0[0], f0[1], f0[2], -std::numeric_limits<float>::infinity());
   const __m128 SHI = _mm_setr_ps(f1[0], f1[1], f1[2], std::numeric_limits<float>::infinity());
 #endif
+  const LeafKernelTable& K = leaf_kernel_table();
   int w = 0;
   // 1: go on, 0: stop (on the surface or degenerate segment). s: the float plane value.
   auto one = [&](std::uint32_t k, float s) {
@@ -190,26 +191,28 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
     for (int a = 0; a < 3; ++a)
       if (std::max({t.a[a], t.b[a], t.c[a]}) < f0[a] || std::min({t.a[a], t.b[a], t.c[a]}) > f1[a]) return 1;
 #endif
-    switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
-      case Cross::none: return 1;
-      case Cross::proper: w += sq > 0 ? 1 : -1; return 1;
-      case Cross::on_p: *on_surface = true; return 0;
-      case Cross::degenerate: return 0;
-    }
-    return 0;
+    // segment_triangle (predicates.hpp), its three edge orientations from the kernel
+    int e[3];
+    K.edge_signs(p, q, t.a, t.b, t.c, e);
+    if ((e[0] > 0 || e[1] > 0 || e[2] > 0) && (e[0] < 0 || e[1] < 0 || e[2] < 0)) return 1;  // misses
+    if (sp == 0) { *on_surface = true; return 0; }
+    if (e[0] == 0 || e[1] == 0 || e[2] == 0) return 0;  // through an edge or a vertex
+    w += sq > 0 ? 1 : -1;  // a proper crossing: q outer -> p inner is entering
+    return 1;
   };
-  for (std::uint32_t b = 0, k = 0; k < n; ++b, k += kBlockTris) {
-    const BlockBox& bb = boxes[b];
-    ++cnt.planes_tested;  // the block's box
-    if (bb.hi[0] < f0[0] || bb.lo[0] > f1[0] || bb.hi[1] < f0[1] || bb.lo[1] > f1[1] || bb.hi[2] < f0[2] ||
-        bb.lo[2] > f1[2])
-      continue;
-    const unsigned m = std::min(n - k, kBlockTris);
-    cnt.planes_tested += m;
-    float s[kBlockTris];
-    for (unsigned todo = plane_pass(blk + k, m, pl, eps, s); todo; todo &= todo - 1) {
-      const unsigned j = unsigned(__builtin_ctz(todo));
-      if (!one(k + j, s[j])) return false;
+  const std::uint32_t nb = (n + kBlockTris - 1) / kBlockTris;
+  for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {
+    const unsigned mb = std::min(nb - b0, 8u);
+    cnt.planes_tested += mb;  // the blocks' boxes
+    for (unsigned hit = K.block_pass(boxes + b0, mb, f0, f1); hit; hit &= hit - 1) {
+      const std::uint32_t k = (b0 + unsigned(__builtin_ctz(hit))) * kBlockTris;
+      const unsigned m = std::min(n - k, kBlockTris);
+      cnt.planes_tested += m;
+      float s[kBlockTris];
+      for (unsigned todo = K.plane_pass(blk + k, m, pl, eps, s); todo; todo &= todo - 1) {
+        const unsigned j = unsigned(__builtin_ctz(todo));
+        if (!one(k + j, s[j])) return false;
+      }
     }
   }
   *delta = w;
@@ -220,52 +223,28 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 
 // Coherent inside on a closed mesh (the winding number is then a function of the point):
 // w(p) = w(prev) + (signed crossings of the segment prev -> p). The segment lies in its bounding
-// box S, and S in the union of the closed leaf-grid cells [cell(S.lo), cell(S.hi)] (at most 2 per
-// axis, checked exactly against the exact cell boundaries of Octree::cell_box); a triangle that
-// meets a closed cell is listed in that cell's leaf (empty nodes have none), so the triangles
-// that can cross the segment are the references of those leaves whose bounding box meets S,
-// each input triangle once. The leaf's blocks of kBlockTris triangles are tested against S by
-// their (derived) boxes, then the triangles of the blocks that meet S by their own boxes
-// (box_pass). Box comparisons are of exact values (float boxes against S rounded outwards to
-// float: conservative), sides and crossings are exact predicates. Returns false (the
-// caller takes the reference path) when the step spans more than 2 cells on an axis, a cell is
-// an out-of-core page's stand-in for another page (an empty node that is not the cell's
-// ancestor), prev lies in a candidate's plane, or the segment is degenerate; p exactly on a
-// triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
+// box S; the triangles that can cross it are those whose boxes meet S (box comparisons are of
+// exact values: float boxes against S rounded outwards to float, conservative), and they are all
+// in the near set (gather_near) when S lies in the set's box: the query scans that short list,
+// and gathers it anew around S when S has left it. Sides and crossings are exact predicates.
+// Returns false (the caller takes the reference path) when the near set cannot be gathered
+// (see gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
+// on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
 bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
   const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
   const Vec3d s1{std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)};
-  const int L = t_.leaf_level;
-  const double cs = t_.cell_size(L), inv = 1.0 / cs;
-  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
-  std::uint32_t r0[3], r1[3];
-  for (int a = 0; a < 3; ++a) {
-    auto cell = [&](double v) {
-      const double r = std::floor((v - t_.root_lo[a]) * inv);
-      return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
-    };
-    r0[a] = cell(s0[a]);
-    r1[a] = cell(s1[a]);
-    if (r1[a] - r0[a] > 1) return false;
-    if (!(t_.root_lo[a] + double(r0[a]) * cs <= s0[a] && s1[a] <= t_.root_lo[a] + double(r1[a] + 1) * cs))
-      return false;
-  }
-  const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
   const float f0[3] = {float_down(s0.x), float_down(s0.y), float_down(s0.z)};
   const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
+  const NearSet& ns = near_;
+  if (!(ns.valid && ns.lo[0] <= f0[0] && ns.lo[1] <= f0[1] && ns.lo[2] <= f0[2] && f1[0] <= ns.hi[0] &&
+        f1[1] <= ns.hi[1] && f1[2] <= ns.hi[2]) &&
+      !gather_near(s0, s1, leaf_node))
+    return false;
   const LeafTri* tris = t_.tris.data();
   int w = prev_w_;
-  std::uint32_t seen[32];  // input triangles tested, when several leaves may list one twice
-  std::uint32_t nseen = 0;
   auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
     const LeafTri& t = tris[k];
-    if (several) {
-      for (std::uint32_t j = 0; j < nseen; ++j)
-        if (seen[j] == t.tri) return 1;
-      if (nseen == 32) return -1;
-      seen[nseen++] = t.tri;
-    }
     const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
     ++counters.planes_tested;
     const int sq = orient3d(a, b, c, q);
@@ -281,35 +260,120 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
     }
     return -1;
   };
-  for (std::uint32_t z = r0[2]; z <= r1[2]; ++z)
-    for (std::uint32_t y = r0[1]; y <= r1[1]; ++y)
-      for (std::uint32_t x = r0[0]; x <= r1[0]; ++x) {
-        const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
-        const Node& nd = t_.nodes[i];
-        if (nd.kind != NodeKind::leaf) {
-          if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
-          continue;  // an empty node: no triangle meets its closed cell
-        }
-        const Leaf& lf = t_.leaves[nd.index];
-        const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[nd.index];
-        for (std::uint32_t b = 0, k = 0; k < lf.tri_count; ++b, k += kBlockTris) {
-          const BlockBox& bb = boxes[b];
-          if (bb.hi[0] < f0[0] || bb.lo[0] > f1[0] || bb.hi[1] < f0[1] || bb.lo[1] > f1[1] || bb.hi[2] < f0[2] ||
-              bb.lo[2] > f1[2])
-            continue;
-          const std::uint32_t first = lf.tri_begin + k;
-          for (unsigned hit = box_pass(tris + first, std::min(lf.tri_count - k, kBlockTris), f0, f1); hit;
-               hit &= hit - 1) {
-            const int r = test(first + unsigned(__builtin_ctz(hit)));
-            if (r < 0) return false;
-            if (r == 0) { *wout = 1; return true; }
-          }
-        }
-      }
+#if defined(__SSE2__)
+  const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
+  const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+  for (std::uint32_t j = 0; j < ns.n; j += 4) {
+    __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[0] + j), ax), _mm_cmple_ps(_mm_loadu_ps(ns.blo[0] + j), bx));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[1] + j), ay), _mm_cmple_ps(_mm_loadu_ps(ns.blo[1] + j), by)));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[2] + j), az), _mm_cmple_ps(_mm_loadu_ps(ns.blo[2] + j), bz)));
+    for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
+      const int r = test(ns.k[j + unsigned(__builtin_ctz(bits))]);
+      if (r < 0) return false;
+      if (r == 0) { *wout = 1; return true; }
+    }
+  }
+#else
+  for (std::uint32_t j = 0; j < ns.n; ++j) {
+    if (ns.bhi[0][j] < f0[0] || ns.blo[0][j] > f1[0] || ns.bhi[1][j] < f0[1] || ns.blo[1][j] > f1[1] ||
+        ns.bhi[2][j] < f0[2] || ns.blo[2][j] > f1[2])
+      continue;
+    const int r = test(ns.k[j]);
+    if (r < 0) return false;
+    if (r == 0) { *wout = 1; return true; }
+  }
+#endif
   *wout = w;
   prev_p_ = p;
   prev_w_ = w;
   return true;
+}
+
+// The near set around the box [s0, s1] (step_from_prev): its box is [s0, s1] grown by a margin
+// of kNearMargin leaf cells (or not grown, if the grown box fails below), rounded outwards to
+// float. The box must lie in the union of the closed leaf-grid cells [cell(lo), cell(hi)], at
+// most 2 per axis (checked exactly against the exact cell boundaries of Octree::cell_box); a
+// triangle that meets a closed cell is listed in that cell's leaf (empty nodes have none), so
+// the triangles whose boxes meet the box are among those leaves' references: the leaves' blocks
+// are tested by their (derived) boxes, then the triangles of the blocks that meet it by their own
+// (box_pass), and an input triangle listed in two leaves is kept once. Fails (valid = false)
+// when the box spans more cells, a cell is an out-of-core page's stand-in for another page (an
+// empty node that is not the cell's ancestor), or more than kNearMax triangles meet it.
+bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node) {
+  constexpr double kNearMargin = 1.0 / 32;
+  NearSet& ns = near_;
+  const int L = t_.leaf_level;
+  const double cs = t_.cell_size(L), inv = 1.0 / cs;
+  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
+  const LeafTri* tris = t_.tris.data();
+  const LeafKernelTable& K = leaf_kernel_table();
+  for (const double margin : {kNearMargin * cs, 0.0}) {
+    ns.valid = false;
+    ns.n = 0;
+    const Vec3d g0 = s0 - Vec3d(margin, margin, margin), g1 = s1 + Vec3d(margin, margin, margin);
+    for (int a = 0; a < 3; ++a) {
+      ns.lo[a] = float_down(std::min(g0[a], s0[a]));  // (the margin's rounding never shrinks the box)
+      ns.hi[a] = float_up(std::max(g1[a], s1[a]));
+    }
+    std::uint32_t r0[3], r1[3];
+    bool fits = true;
+    for (int a = 0; a < 3 && fits; ++a) {
+      auto cell = [&](double v) {
+        const double r = std::floor((v - t_.root_lo[a]) * inv);
+        return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
+      };
+      r0[a] = cell(ns.lo[a]);
+      r1[a] = cell(ns.hi[a]);
+      fits = r1[a] - r0[a] <= 1 && t_.root_lo[a] + double(r0[a]) * cs <= double(ns.lo[a]) &&
+             double(ns.hi[a]) <= t_.root_lo[a] + double(r1[a] + 1) * cs;
+    }
+    if (!fits) continue;
+    const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
+    bool ok = true;
+    auto add = [&](std::uint32_t k) {
+      const LeafTri& t = tris[k];
+      if (several)
+        for (std::uint32_t j = 0; j < ns.n; ++j)
+          if (tris[ns.k[j]].tri == t.tri) return;
+      if (ns.n == kNearMax) { ok = false; return; }
+      const std::uint32_t j = ns.n++;
+      ns.k[j] = k;
+      for (int a = 0; a < 3; ++a) {
+        ns.blo[a][j] = std::min({t.a[a], t.b[a], t.c[a]});
+        ns.bhi[a][j] = std::max({t.a[a], t.b[a], t.c[a]});
+      }
+    };
+    for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
+      for (std::uint32_t y = r0[1]; y <= r1[1] && ok; ++y)
+        for (std::uint32_t x = r0[0]; x <= r1[0] && ok; ++x) {
+          const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
+          const Node& nd = t_.nodes[i];
+          if (nd.kind != NodeKind::leaf) {
+            if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
+            continue;  // an empty node: no triangle meets its closed cell
+          }
+          const Leaf& lf = t_.leaves[nd.index];
+          const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[nd.index];
+          const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+          for (std::uint32_t b0 = 0; b0 < nb && ok; b0 += 8)
+            for (unsigned bh = K.block_pass(boxes + b0, std::min(nb - b0, 8u), ns.lo, ns.hi); bh && ok; bh &= bh - 1) {
+              const std::uint32_t k = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
+              const std::uint32_t first = lf.tri_begin + k;
+              for (unsigned hit = K.box_pass(tris + first, std::min(lf.tri_count - k, kBlockTris), ns.lo, ns.hi);
+                   hit && ok; hit &= hit - 1)
+                add(first + unsigned(__builtin_ctz(hit)));
+            }
+        }
+    if (!ok) continue;
+    for (std::uint32_t j = ns.n; j % 4 != 0; ++j)  // padding: empty boxes
+      for (int a = 0; a < 3; ++a) {
+        ns.blo[a][j] = std::numeric_limits<float>::infinity();
+        ns.bhi[a][j] = -std::numeric_limits<float>::infinity();
+      }
+    ns.valid = true;
+    return true;
+  }
+  return false;
 }
 
 bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {
