@@ -27,10 +27,20 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 /// Shewchuk's first-stage error bound of orient3d, as in predicates.hpp.
 constexpr double kOrientErrBoundA = 7.7715611723761027e-16;
 
-/// The edge orientation the filter could not decide: orient3d_exact on the original points.
-int exact_edge(const Vec3d& p, const Vec3d& q, const float* x, const float* y) {
-  ++g_orient_exact_calls;
-  return orient3d_exact(p, q, to_d(x), to_d(y));
+/// The edge orientations the filter could not decide (`undecided`: bit i for edge i), by
+/// orient3d_exact on the original points, into the mask of edge_signs. Out of line: rare, and
+/// it keeps the kernels' hot path free of calls.
+__attribute__((noinline, cold)) unsigned exact_edges(const Vec3d& p, const Vec3d& q, const float* a, const float* b,
+                                                     const float* c, unsigned undecided) {
+  const float* v[4] = {a, b, c, a};
+  unsigned mask = 0;
+  for (int i = 0; i < 3; ++i)
+    if (undecided >> i & 1u) {
+      ++g_orient_exact_calls;
+      const int e = orient3d_exact(p, q, to_d(v[i]), to_d(v[i + 1]));
+      mask |= e > 0 ? 1u << i : e < 0 ? 16u << i : 0u;
+    }
+  return mask;
 }
 
 inline unsigned low_bits(unsigned m) { return m >= 32 ? ~0u : (1u << m) - 1u; }
@@ -133,16 +143,18 @@ inline int edge_filter(const double u[3], const double X[3], const double Y[3]) 
   return 0;
 }
 
-void edge_signs_baseline(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3], int e[3]) {
+unsigned edge_signs_baseline(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]) {
   const double u[3] = {q.x - p.x, q.y - p.y, q.z - p.z};
   const double D[3][3] = {{double(a[0]) - p.x, double(a[1]) - p.y, double(a[2]) - p.z},
                           {double(b[0]) - p.x, double(b[1]) - p.y, double(b[2]) - p.z},
                           {double(c[0]) - p.x, double(c[1]) - p.y, double(c[2]) - p.z}};
-  const float* v[3] = {a, b, c};
+  unsigned mask = 0, undecided = 0;
   for (int i = 0; i < 3; ++i) {
-    e[i] = edge_filter(u, D[i], D[(i + 1) % 3]);
-    if (e[i] == 0) e[i] = exact_edge(p, q, v[i], v[(i + 1) % 3]);
+    const int e = edge_filter(u, D[i], D[(i + 1) % 3]);
+    mask |= e > 0 ? 1u << i : e < 0 ? 16u << i : 0u;
+    undecided |= (e == 0 ? 1u : 0u) << i;
   }
+  return undecided ? mask | exact_edges(p, q, a, b, c, undecided) : mask;
 }
 
 // --- AVX2 -------------------------------------------------------------------------------------
@@ -233,8 +245,7 @@ EBP_AVX2 unsigned block_pass_avx2(const BlockBox* boxes, unsigned m, const float
   return ~miss & low_bits(m);
 }
 
-EBP_AVX2 void edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3],
-                              int e[3]) {
+EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]) {
   // Lane i = edge i: X = (a, b, c) - p, Y = (b, c, a) - p, the filter of edge_filter lane-wise
   // (same operations; lane 3 is zero and ignored).
   // [p.x, p.y, p.z, 0] by two loads (a lane-wise set compiles to a VEX vmovq that valgrind 3.19
@@ -265,13 +276,10 @@ EBP_AVX2 void edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[3], 
                     _mm256_mul_pd(_mm256_add_pd(abs_pd(cdxady), abs_pd(adxcdy)), abs_pd(Xz))),
       _mm256_mul_pd(_mm256_add_pd(abs_pd(adxbdy), abs_pd(bdxady)), abs_pd(Yz)));
   const __m256d err = _mm256_mul_pd(_mm256_set1_pd(kOrientErrBoundA), perm);
-  const unsigned pos = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(det, err, _CMP_GT_OQ)));
-  const unsigned neg = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_xor_pd(det, sign), err, _CMP_GT_OQ)));
-  const float* v[3] = {a, b, c};
-  for (int i = 0; i < 3; ++i) {
-    e[i] = (pos >> i) & 1u ? 1 : (neg >> i) & 1u ? -1 : 0;
-    if (e[i] == 0) e[i] = exact_edge(p, q, v[i], v[(i + 1) % 3]);
-  }
+  const unsigned pos = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(det, err, _CMP_GT_OQ))) & 7u;
+  const unsigned neg = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_xor_pd(det, sign), err, _CMP_GT_OQ))) & 7u;
+  const unsigned undecided = ~(pos | neg) & 7u;
+  return undecided ? pos | neg << 4 | exact_edges(p, q, a, b, c, undecided) : pos | neg << 4;
 }
 
 #endif  // EBP_X86

@@ -41,11 +41,12 @@ struct LeafKernelTable {
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);
   /// The exact signs of the three edge orientations of the segment p -> q against triangle
-  /// (a, b, c) (float vertices, taken exactly as doubles): e[0] = orient3d(p, q, a, b),
-  /// e[1] = orient3d(p, q, b, c), e[2] = orient3d(p, q, c, a) (predicates.hpp). The filter is
-  /// orient3d's (Shewchuk's bound A) on the differences from p, computed once for the three; where
-  /// it cannot decide, orient3d_exact. Exact, so every kernel gives the same signs.
-  void (*edge_signs)(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3], int e[3]);
+  /// (a, b, c) (float vertices, taken exactly as doubles; 16 bytes readable at each, as in a
+  /// LeafTri): e0 = orient3d(p, q, a, b), e1 = orient3d(p, q, b, c), e2 = orient3d(p, q, c, a)
+  /// (predicates.hpp), as a mask: bit i set when e_i > 0, bit 4 + i when e_i < 0 (neither: 0).
+  /// The filter is orient3d's (Shewchuk's bound A) on the differences from p, computed once for
+  /// the three; where it cannot decide, orient3d_exact. Exact, so every kernel gives the same.
+  unsigned (*edge_signs)(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]);
   LeafKernels kind;
 };
 

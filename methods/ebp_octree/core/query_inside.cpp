@@ -192,11 +192,10 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
       if (std::max({t.a[a], t.b[a], t.c[a]}) < f0[a] || std::min({t.a[a], t.b[a], t.c[a]}) > f1[a]) return 1;
 #endif
     // segment_triangle (predicates.hpp), its three edge orientations from the kernel
-    int e[3];
-    K.edge_signs(p, q, t.a, t.b, t.c, e);
-    if ((e[0] > 0 || e[1] > 0 || e[2] > 0) && (e[0] < 0 || e[1] < 0 || e[2] < 0)) return 1;  // misses
+    const unsigned e = K.edge_signs(p, q, t.a, t.b, t.c), pos = e & 7u, neg = e >> 4;
+    if (pos && neg) return 1;  // misses
     if (sp == 0) { *on_surface = true; return 0; }
-    if (e[0] == 0 || e[1] == 0 || e[2] == 0) return 0;  // through an edge or a vertex
+    if ((pos | neg) != 7u) return 0;  // through an edge or a vertex
     w += sq > 0 ? 1 : -1;  // a proper crossing: q outer -> p inner is entering
     return 1;
   };
@@ -227,8 +226,9 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 // exact values: float boxes against S rounded outwards to float, conservative), and they are all
 // in the near set (gather_near) when S lies in the set's box: the query scans that short list,
 // and gathers it anew around S when S has left it. Sides and crossings are exact predicates.
-// Returns false (the caller takes the reference path) when the near set cannot be gathered
-// (see gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
+// Returns false (the caller takes the reference path) when the step is a jump (over a quarter
+// of a leaf cell on an axis) out of the near set's box, the near set cannot be gathered (see
+// gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
 // on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
 bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
@@ -238,9 +238,12 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
   const NearSet& ns = near_;
   if (!(ns.valid && ns.lo[0] <= f0[0] && ns.lo[1] <= f0[1] && ns.lo[2] <= f0[2] && f1[0] <= ns.hi[0] &&
-        f1[1] <= ns.hi[1] && f1[2] <= ns.hi[2]) &&
-      !gather_near(s0, s1, leaf_node))
-    return false;
+        f1[1] <= ns.hi[1] && f1[2] <= ns.hi[2])) {
+    // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
+    // reference path is cheaper than gathering the triangles of up to 8 leaves.
+    const double jump = 0.25 * t_.cell_size(t_.leaf_level);
+    if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, leaf_node)) return false;
+  }
   const LeafTri* tris = t_.tris.data();
   int w = prev_w_;
   auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
