@@ -10,21 +10,12 @@
 
 namespace ebp {
 
-namespace {
-constexpr std::size_t kLeafBoxSlots = 64;  // Query::leaf_boxes_ (at most)
-}  // namespace
-
 Query::Query(const Octree& tree, bool coherent)
     : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0), leaf_stamp_(tree.leaves.size(), 0) {
   if (!has_leaf_blocks(t_)) throw std::logic_error("ebp::Query: the Octree lacks its leaf blocks (compute_leaf_blocks)");
   std::uint32_t mb = 0;
   for (const Leaf& lf : t_.leaves) mb = std::max(mb, (lf.tri_count + kBlockTris - 1) / kBlockTris);
   order_.resize(mb);
-  if (coherent_ && t_.closed) {  // a power of two, no more than the leaves (an out-of-core page has few)
-    std::size_t slots = 1;
-    while (slots < kLeafBoxSlots && slots < t_.leaves.size()) slots *= 2;
-    leaf_boxes_.resize(slots);
-  }
 }
 
 void Query::reset_path() {
@@ -33,6 +24,7 @@ void Query::reset_path() {
   last_leaf_ = UINT32_MAX;
   last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
+  near_.valid = false;
 }
 
 }  // namespace ebp

@@ -72,23 +72,24 @@ class Query {
   std::vector<std::uint32_t> stamp_;
   std::uint32_t query_id_ = 0;
   // coherent inside (closed meshes): the last point of the path whose winding number is known
-  // exactly (see classify_leaf and DESIGN.md), and the bounding boxes of the triangles of the
-  // last few leaves used, as float arrays (a cache of derived data; answers do not depend on it).
-  struct LeafBoxes {
-    std::uint32_t leaf = UINT32_MAX;  ///< leaf index, or none
-    std::uint32_t n4 = 0;             ///< slots: each octant group padded to 4 with empty boxes
-    std::uint32_t group[9] = {};      ///< the slots of octant g are [group[g], group[g + 1])
-    float glo[3][8], ghi[3][8];       ///< each group's bounding box
-    std::vector<float> b;             ///< lo x[n4], lo y, lo z, hi x, hi y, hi z
-    std::vector<std::uint32_t> k;     ///< the slot's triangle, offset in the leaf's block
+  // exactly (see classify_leaf and DESIGN.md), and the triangles near the path: those whose
+  // boxes meet the float box [lo, hi] around it, from every leaf whose cell meets it, each once,
+  // with their boxes (SoA, padded to 4 with empty boxes). A cache of derived data: answers do
+  // not depend on it.
+  static constexpr std::uint32_t kNearMax = 64;
+  struct NearSet {
+    bool valid = false;
+    float lo[3], hi[3];
+    std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 4) hold empty boxes
+    float blo[3][kNearMax], bhi[3][kNearMax];
+    std::uint32_t k[kNearMax];  ///< LeafTri index
   };
   bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
-  const LeafBoxes& leaf_boxes(std::uint32_t leaf_index);
+  bool gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node);
+  NearSet near_;
   bool prev_ok_ = false;
   Vec3d prev_p_;
   int prev_w_ = 0;
-  std::vector<LeafBoxes> leaf_boxes_;  // direct-mapped by leaf index
-  std::vector<float> tmp_box_;
   // coherent state
   std::uint32_t last_node_ = UINT32_MAX;
   std::uint32_t last_cell_[3] = {0, 0, 0};

@@ -12,6 +12,7 @@
 #endif
 
 #include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/core/reference_points.hpp"
@@ -149,30 +150,30 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
 }
 
 /// leaf_winding from the leaf's reference point (its side of triangle k is the kRefPositive
-/// bit). Same decisions, in the same order, as leaf_winding with that q_side; the float plane
-/// values of four triangles at a time are computed with SSE in the same operation order as the
-/// scalar expression (no FMA on this target), so they are bit for bit the same, and only the
-/// triangles that the scalar loop would not skip at once (degenerate, or float side equal to the
-/// reference's) reach the scalar tail.
+/// bit), block by block: a block of kBlockTris triangles whose box misses the segment's box
+/// (rounded outwards to float: conservative) holds no triangle the segment can cross or touch,
+/// nor p, so it is skipped whole; in the others the plane pass (leaf_kernels.hpp) gives the
+/// float plane values, bit for bit those of the scalar expression, and the triangles that the
+/// scalar loop would not skip at once (degenerate, or float side equal to the reference's)
+/// go on, one at a time, in leaf order, reusing the plane value. Same decisions as leaf_winding
+/// with that q_side on the triangles of the blocks that meet the segment.
 bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
-                      QueryCounters& cnt, int* delta, bool* on_surface) {
-  const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
-              pz = float(p.z - double(lf.centre[2]));
+                      const BlockBox* boxes, QueryCounters& cnt, int* delta, bool* on_surface) {
+  const float pl[3] = {float(p.x - double(lf.centre[0])), float(p.y - double(lf.centre[1])),
+                       float(p.z - double(lf.centre[2]))};
   const float eps = lf.eps;
-  const double sx0 = std::min(p.x, q.x), sx1 = std::max(p.x, q.x), sy0 = std::min(p.y, q.y),
-               sy1 = std::max(p.y, q.y), sz0 = std::min(p.z, q.z), sz1 = std::max(p.z, q.z);
+  const float f0[3] = {float_down(std::min(p.x, q.x)), float_down(std::min(p.y, q.y)), float_down(std::min(p.z, q.z))};
+  const float f1[3] = {float_up(std::max(p.x, q.x)), float_up(std::max(p.y, q.y)), float_up(std::max(p.z, q.z))};
 #if defined(__SSE2__)
-  // The segment's box rounded outwards to float (a float box that misses it misses the exact
-  // one); lane 3 of the triangle boxes below is not a coordinate and always passes.
-  const __m128 SLO = _mm_setr_ps(float_down(sx0), float_down(sy0), float_down(sz0), -std::numeric_limits<float>::infinity());
-  const __m128 SHI = _mm_setr_ps(float_up(sx1), float_up(sy1), float_up(sz1), std::numeric_limits<float>::infinity());
+  // Lane 3 of the triangle's vertex rows below is not a coordinate and always passes.
+  const __m128 SLO = _mm_setr_ps(f0[0], f0[1], f0[2], -std::numeric_limits<float>::infinity());
+  const __m128 SHI = _mm_setr_ps(f1[0], f1[1], f1[2], std::numeric_limits<float>::infinity());
 #endif
+  const LeafKernelTable& K = leaf_kernel_table();
   int w = 0;
-  cnt.planes_tested += n;
   // 1: go on, 0: stop (on the surface or degenerate segment). s: the float plane value.
   auto one = [&](std::uint32_t k, float s) {
     const LeafTri& t = blk[k];
-    if (t.flags & kDegenerate) return 1;
     const int sq = (t.flags & kRefPositive) ? 1 : -1;
     int sp;
     if (s > eps) sp = 1;
@@ -187,46 +188,31 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
     const __m128 lo = _mm_min_ps(_mm_min_ps(A, B), C), hi = _mm_max_ps(_mm_max_ps(A, B), C);
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(hi, SLO), _mm_cmpgt_ps(lo, SHI))) != 0) return 1;
 #else
-    if (double(std::max({t.a[0], t.b[0], t.c[0]})) < sx0 || double(std::min({t.a[0], t.b[0], t.c[0]})) > sx1 ||
-        double(std::max({t.a[1], t.b[1], t.c[1]})) < sy0 || double(std::min({t.a[1], t.b[1], t.c[1]})) > sy1 ||
-        double(std::max({t.a[2], t.b[2], t.c[2]})) < sz0 || double(std::min({t.a[2], t.b[2], t.c[2]})) > sz1)
-      return 1;
+    for (int a = 0; a < 3; ++a)
+      if (std::max({t.a[a], t.b[a], t.c[a]}) < f0[a] || std::min({t.a[a], t.b[a], t.c[a]}) > f1[a]) return 1;
 #endif
-    switch (segment_triangle(p, q, sp, sq, to_d(t.a), to_d(t.b), to_d(t.c))) {
-      case Cross::none: return 1;
-      case Cross::proper: w += sq > 0 ? 1 : -1; return 1;
-      case Cross::on_p: *on_surface = true; return 0;
-      case Cross::degenerate: return 0;
-    }
-    return 0;
+    // segment_triangle (predicates.hpp), its three edge orientations from the kernel
+    const unsigned e = K.edge_signs(p, q, t.a, t.b, t.c), pos = e & 7u, neg = e >> 4;
+    if (pos && neg) return 1;  // misses
+    if (sp == 0) { *on_surface = true; return 0; }
+    if ((pos | neg) != 7u) return 0;  // through an edge or a vertex
+    w += sq > 0 ? 1 : -1;  // a proper crossing: q outer -> p inner is entering
+    return 1;
   };
-  std::uint32_t k = 0;
-#if defined(__SSE2__)
-  const __m128 PX = _mm_set1_ps(px), PY = _mm_set1_ps(py), PZ = _mm_set1_ps(pz);
-  const __m128 EP = _mm_set1_ps(eps), EN = _mm_set1_ps(-eps);
-  static_assert(offsetof(LeafTri, d) == offsetof(LeafTri, n) + 12, "plane n, d contiguous");
-  for (; k + 4 <= n; k += 4) {
-    __m128 r0 = _mm_loadu_ps(blk[k].n), r1 = _mm_loadu_ps(blk[k + 1].n), r2 = _mm_loadu_ps(blk[k + 2].n),
-           r3 = _mm_loadu_ps(blk[k + 3].n);
-    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // nx, ny, nz, d of the four
-    const __m128 s = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, PX), _mm_mul_ps(r1, PY)), _mm_mul_ps(r2, PZ)), r3);
-    const unsigned gt = unsigned(_mm_movemask_ps(_mm_cmpgt_ps(s, EP)));
-    const unsigned lt = unsigned(_mm_movemask_ps(_mm_cmplt_ps(s, EN)));
-    const __m128i fl = _mm_set_epi32(int(blk[k + 3].flags), int(blk[k + 2].flags), int(blk[k + 1].flags),
-                                     int(blk[k].flags));
-    const unsigned pos = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_slli_epi32(fl, 31))));  // kRefPositive
-    const unsigned deg = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_slli_epi32(fl, 30))));  // kDegenerate
-    alignas(16) float sv[4];
-    _mm_store_ps(sv, s);
-    for (unsigned todo = ~((gt & pos) | (lt & ~pos) | deg) & 15u; todo; todo &= todo - 1) {
-      const unsigned j = unsigned(__builtin_ctz(todo));
-      if (!one(k + j, sv[j])) return false;
+  const std::uint32_t nb = (n + kBlockTris - 1) / kBlockTris;
+  for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {
+    const unsigned mb = std::min(nb - b0, 8u);
+    cnt.planes_tested += mb;  // the blocks' boxes
+    for (unsigned hit = K.block_pass(boxes + b0, mb, f0, f1); hit; hit &= hit - 1) {
+      const std::uint32_t k = (b0 + unsigned(__builtin_ctz(hit))) * kBlockTris;
+      const unsigned m = std::min(n - k, kBlockTris);
+      cnt.planes_tested += m;
+      float s[kBlockTris];
+      for (unsigned todo = K.plane_pass(blk + k, m, pl, eps, s); todo; todo &= todo - 1) {
+        const unsigned j = unsigned(__builtin_ctz(todo));
+        if (!one(k + j, s[j])) return false;
+      }
     }
-  }
-#endif
-  for (; k < n; ++k) {
-    const LeafTri& t = blk[k];
-    if (!one(k, t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d)) return false;
   }
   *delta = w;
   return true;
@@ -234,116 +220,34 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 
 }  // namespace
 
-// The bounding boxes of a leaf's triangles (float, exact: min/max of the float coordinates),
-// grouped by the octant of the leaf cell that holds their box centre, with each group's box; a
-// small direct-mapped cache. Degenerate triangles are left out (no role in crossings).
-const Query::LeafBoxes& Query::leaf_boxes(std::uint32_t li) {
-  LeafBoxes& e = leaf_boxes_[li & (leaf_boxes_.size() - 1)];
-  if (e.leaf == li) return e;
-  const Leaf& lf = t_.leaves[li];
-  const std::uint32_t n = lf.tri_count;
-  const LeafTri* blk = t_.tris.data() + lf.tri_begin;
-  std::uint32_t count[8] = {};
-  tmp_box_.resize(std::size_t(7) * n);  // lo x, y, z, hi x, y, z, octant (as float) per triangle
-  float* tb = tmp_box_.data();
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const LeafTri& t = blk[k];
-    float* r = tb + std::size_t(7) * k;
-    if (t.flags & kDegenerate) { r[6] = 8; continue; }
-    unsigned o = 0;
-    for (int a = 0; a < 3; ++a) {
-      r[a] = std::min({t.a[a], t.b[a], t.c[a]});
-      r[3 + a] = std::max({t.a[a], t.b[a], t.c[a]});
-      if (r[a] + r[3 + a] > 2.0f * lf.centre[a]) o |= 1u << a;
-    }
-    r[6] = float(o);
-    ++count[o];
-  }
-  std::uint32_t fill[8];
-  e.group[0] = 0;
-  for (int g = 0; g < 8; ++g) {
-    fill[g] = e.group[g];
-    e.group[g + 1] = e.group[g] + ((count[g] + 3) & ~3u);
-  }
-  const std::uint32_t n4 = e.group[8];
-  e.leaf = li;
-  e.n4 = n4;
-  e.b.resize(std::size_t(6) * n4);
-  e.k.resize(n4);  // (a padding slot's k is never read: its box is empty)
-  float* b = e.b.data();
-  for (int a = 0; a < 3; ++a)
-    for (int g = 0; g < 8; ++g) {
-      e.glo[a][g] = std::numeric_limits<float>::infinity();
-      e.ghi[a][g] = -std::numeric_limits<float>::infinity();
-    }
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const float* r = tb + std::size_t(7) * k;
-    if (r[6] == 8) continue;
-    const unsigned g = unsigned(r[6]);
-    const std::uint32_t j = fill[g]++;
-    e.k[j] = k;
-    for (int a = 0; a < 3; ++a) {
-      b[a * n4 + j] = r[a];
-      b[(3 + a) * n4 + j] = r[3 + a];
-      e.glo[a][g] = std::min(e.glo[a][g], r[a]);
-      e.ghi[a][g] = std::max(e.ghi[a][g], r[3 + a]);
-    }
-  }
-  for (int g = 0; g < 8; ++g)
-    for (std::uint32_t j = fill[g]; j < e.group[g + 1]; ++j)  // padding: empty boxes
-      for (int a = 0; a < 3; ++a) {
-        b[a * n4 + j] = std::numeric_limits<float>::infinity();
-        b[(3 + a) * n4 + j] = -std::numeric_limits<float>::infinity();
-      }
-  return e;
-}
-
 // Coherent inside on a closed mesh (the winding number is then a function of the point):
 // w(p) = w(prev) + (signed crossings of the segment prev -> p). The segment lies in its bounding
-// box S, and S in the union of the closed leaf-grid cells [cell(S.lo), cell(S.hi)] (at most 2 per
-// axis, checked exactly against the exact cell boundaries of Octree::cell_box); a triangle that
-// meets a closed cell is listed in that cell's leaf (empty nodes have none), so the triangles
-// that can cross the segment are the references of those leaves whose bounding box meets S,
-// each input triangle once. Box comparisons are of exact values (float boxes against S rounded
-// outwards to float: conservative), sides and crossings are exact predicates. Returns false (the
-// caller takes the reference path) when the step spans more than 2 cells on an axis, a cell is
-// an out-of-core page's stand-in for another page (an empty node that is not the cell's
-// ancestor), prev lies in a candidate's plane, or the segment is degenerate; p exactly on a
-// triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
+// box S; the triangles that can cross it are those whose boxes meet S (box comparisons are of
+// exact values: float boxes against S rounded outwards to float, conservative), and they are all
+// in the near set (gather_near) when S lies in the set's box: the query scans that short list,
+// and gathers it anew around S when S has left it. Sides and crossings are exact predicates.
+// Returns false (the caller takes the reference path) when the step is a jump (over a quarter
+// of a leaf cell on an axis) out of the near set's box, the near set cannot be gathered (see
+// gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
+// on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
 bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
   const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
   const Vec3d s1{std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)};
-  const int L = t_.leaf_level;
-  const double cs = t_.cell_size(L), inv = 1.0 / cs;
-  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
-  std::uint32_t r0[3], r1[3];
-  for (int a = 0; a < 3; ++a) {
-    auto cell = [&](double v) {
-      const double r = std::floor((v - t_.root_lo[a]) * inv);
-      return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
-    };
-    r0[a] = cell(s0[a]);
-    r1[a] = cell(s1[a]);
-    if (r1[a] - r0[a] > 1) return false;
-    if (!(t_.root_lo[a] + double(r0[a]) * cs <= s0[a] && s1[a] <= t_.root_lo[a] + double(r1[a] + 1) * cs))
-      return false;
-  }
-  const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
   const float f0[3] = {float_down(s0.x), float_down(s0.y), float_down(s0.z)};
   const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
+  const NearSet& ns = near_;
+  if (!(ns.valid && ns.lo[0] <= f0[0] && ns.lo[1] <= f0[1] && ns.lo[2] <= f0[2] && f1[0] <= ns.hi[0] &&
+        f1[1] <= ns.hi[1] && f1[2] <= ns.hi[2])) {
+    // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
+    // reference path is cheaper than gathering the triangles of up to 8 leaves.
+    const double jump = 0.25 * t_.cell_size(t_.leaf_level);
+    if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, leaf_node)) return false;
+  }
   const LeafTri* tris = t_.tris.data();
   int w = prev_w_;
-  std::uint32_t seen[32];  // input triangles tested, when several leaves may list one twice
-  std::uint32_t nseen = 0;
   auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
     const LeafTri& t = tris[k];
-    if (several) {
-      for (std::uint32_t j = 0; j < nseen; ++j)
-        if (seen[j] == t.tri) return 1;
-      if (nseen == 32) return -1;
-      seen[nseen++] = t.tri;
-    }
     const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
     ++counters.planes_tested;
     const int sq = orient3d(a, b, c, q);
@@ -359,68 +263,123 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
     }
     return -1;
   };
-  for (std::uint32_t z = r0[2]; z <= r1[2]; ++z)
-    for (std::uint32_t y = r0[1]; y <= r1[1]; ++y)
-      for (std::uint32_t x = r0[0]; x <= r1[0]; ++x) {
-        const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
-        const Node& nd = t_.nodes[i];
-        if (nd.kind != NodeKind::leaf) {
-          if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
-          continue;  // an empty node: no triangle meets its closed cell
-        }
-        const LeafBoxes& lb = leaf_boxes(nd.index);
-        const std::uint32_t base = t_.leaves[nd.index].tri_begin, n4 = lb.n4;
-        const float* lx = lb.b.data();
-        const float *ly = lx + n4, *lz = ly + n4, *hx = lz + n4, *hy = hx + n4, *hz = hy + n4;
 #if defined(__SSE2__)
-        const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
-        const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
-        unsigned groups = 0;  // the groups whose box meets S (an empty group's box is empty)
-        for (int h = 0; h < 8; h += 4) {
-          __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[0] + h), ax), _mm_cmple_ps(_mm_loadu_ps(lb.glo[0] + h), bx));
-          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[1] + h), ay), _mm_cmple_ps(_mm_loadu_ps(lb.glo[1] + h), by)));
-          m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(lb.ghi[2] + h), az), _mm_cmple_ps(_mm_loadu_ps(lb.glo[2] + h), bz)));
-          groups |= unsigned(_mm_movemask_ps(m)) << h;
-        }
+  const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
+  const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
+  for (std::uint32_t j = 0; j < ns.n; j += 4) {
+    __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[0] + j), ax), _mm_cmple_ps(_mm_loadu_ps(ns.blo[0] + j), bx));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[1] + j), ay), _mm_cmple_ps(_mm_loadu_ps(ns.blo[1] + j), by)));
+    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[2] + j), az), _mm_cmple_ps(_mm_loadu_ps(ns.blo[2] + j), bz)));
+    for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
+      const int r = test(ns.k[j + unsigned(__builtin_ctz(bits))]);
+      if (r < 0) return false;
+      if (r == 0) { *wout = 1; return true; }
+    }
+  }
 #else
-        unsigned groups = 0;
-        for (int g = 0; g < 8; ++g)
-          if (!(lb.ghi[0][g] < f0[0] || lb.glo[0][g] > f1[0] || lb.ghi[1][g] < f0[1] || lb.glo[1][g] > f1[1] ||
-                lb.ghi[2][g] < f0[2] || lb.glo[2][g] > f1[2]))
-            groups |= 1u << g;
+  for (std::uint32_t j = 0; j < ns.n; ++j) {
+    if (ns.bhi[0][j] < f0[0] || ns.blo[0][j] > f1[0] || ns.bhi[1][j] < f0[1] || ns.blo[1][j] > f1[1] ||
+        ns.bhi[2][j] < f0[2] || ns.blo[2][j] > f1[2])
+      continue;
+    const int r = test(ns.k[j]);
+    if (r < 0) return false;
+    if (r == 0) { *wout = 1; return true; }
+  }
 #endif
-        for (; groups; groups &= groups - 1) {
-          const int g = __builtin_ctz(groups);
-#if defined(__SSE2__)
-          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; j += 4) {
-            __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hx + j), ax), _mm_cmple_ps(_mm_loadu_ps(lx + j), bx));
-            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hy + j), ay), _mm_cmple_ps(_mm_loadu_ps(ly + j), by)));
-            m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(hz + j), az), _mm_cmple_ps(_mm_loadu_ps(lz + j), bz)));
-            for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
-              const int r = test(base + lb.k[j + unsigned(__builtin_ctz(bits))]);
-              if (r < 0) return false;
-              if (r == 0) { *wout = 1; return true; }
-            }
-          }
-#else
-          for (std::uint32_t j = lb.group[g]; j < lb.group[g + 1]; ++j) {
-            if (hx[j] < f0[0] || lx[j] > f1[0] || hy[j] < f0[1] || ly[j] > f1[1] || hz[j] < f0[2] || lz[j] > f1[2])
-              continue;
-            const int r = test(base + lb.k[j]);
-            if (r < 0) return false;
-            if (r == 0) { *wout = 1; return true; }
-          }
-#endif
-        }
-      }
   *wout = w;
   prev_p_ = p;
   prev_w_ = w;
   return true;
 }
 
+// The near set around the box [s0, s1] (step_from_prev): its box is [s0, s1] grown by a margin
+// of kNearMargin leaf cells (or not grown, if the grown box fails below), rounded outwards to
+// float. The box must lie in the union of the closed leaf-grid cells [cell(lo), cell(hi)], at
+// most 2 per axis (checked exactly against the exact cell boundaries of Octree::cell_box); a
+// triangle that meets a closed cell is listed in that cell's leaf (empty nodes have none), so
+// the triangles whose boxes meet the box are among those leaves' references: the leaves' blocks
+// are tested by their (derived) boxes, then the triangles of the blocks that meet it by their own
+// (box_pass), and an input triangle listed in two leaves is kept once. Fails (valid = false)
+// when the box spans more cells, a cell is an out-of-core page's stand-in for another page (an
+// empty node that is not the cell's ancestor), or more than kNearMax triangles meet it.
+bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node) {
+  constexpr double kNearMargin = 1.0 / 32;
+  NearSet& ns = near_;
+  const int L = t_.leaf_level;
+  const double cs = t_.cell_size(L), inv = 1.0 / cs;
+  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
+  const LeafTri* tris = t_.tris.data();
+  const LeafKernelTable& K = leaf_kernel_table();
+  for (const double margin : {kNearMargin * cs, 0.0}) {
+    ns.valid = false;
+    ns.n = 0;
+    const Vec3d g0 = s0 - Vec3d(margin, margin, margin), g1 = s1 + Vec3d(margin, margin, margin);
+    for (int a = 0; a < 3; ++a) {
+      ns.lo[a] = float_down(std::min(g0[a], s0[a]));  // (the margin's rounding never shrinks the box)
+      ns.hi[a] = float_up(std::max(g1[a], s1[a]));
+    }
+    std::uint32_t r0[3], r1[3];
+    bool fits = true;
+    for (int a = 0; a < 3 && fits; ++a) {
+      auto cell = [&](double v) {
+        const double r = std::floor((v - t_.root_lo[a]) * inv);
+        return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
+      };
+      r0[a] = cell(ns.lo[a]);
+      r1[a] = cell(ns.hi[a]);
+      fits = r1[a] - r0[a] <= 1 && t_.root_lo[a] + double(r0[a]) * cs <= double(ns.lo[a]) &&
+             double(ns.hi[a]) <= t_.root_lo[a] + double(r1[a] + 1) * cs;
+    }
+    if (!fits) continue;
+    const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
+    bool ok = true;
+    auto add = [&](std::uint32_t k) {
+      const LeafTri& t = tris[k];
+      if (several)
+        for (std::uint32_t j = 0; j < ns.n; ++j)
+          if (tris[ns.k[j]].tri == t.tri) return;
+      if (ns.n == kNearMax) { ok = false; return; }
+      const std::uint32_t j = ns.n++;
+      ns.k[j] = k;
+      for (int a = 0; a < 3; ++a) {
+        ns.blo[a][j] = std::min({t.a[a], t.b[a], t.c[a]});
+        ns.bhi[a][j] = std::max({t.a[a], t.b[a], t.c[a]});
+      }
+    };
+    for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
+      for (std::uint32_t y = r0[1]; y <= r1[1] && ok; ++y)
+        for (std::uint32_t x = r0[0]; x <= r1[0] && ok; ++x) {
+          const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
+          const Node& nd = t_.nodes[i];
+          if (nd.kind != NodeKind::leaf) {
+            if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
+            continue;  // an empty node: no triangle meets its closed cell
+          }
+          const Leaf& lf = t_.leaves[nd.index];
+          const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[nd.index];
+          const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+          for (std::uint32_t b0 = 0; b0 < nb && ok; b0 += 8)
+            for (unsigned bh = K.block_pass(boxes + b0, std::min(nb - b0, 8u), ns.lo, ns.hi); bh && ok; bh &= bh - 1) {
+              const std::uint32_t k = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
+              const std::uint32_t first = lf.tri_begin + k;
+              for (unsigned hit = K.box_pass(tris + first, std::min(lf.tri_count - k, kBlockTris), ns.lo, ns.hi);
+                   hit && ok; hit &= hit - 1)
+                add(first + unsigned(__builtin_ctz(hit)));
+            }
+        }
+    if (!ok) continue;
+    for (std::uint32_t j = ns.n; j % 4 != 0; ++j)  // padding: empty boxes
+      for (int a = 0; a < 3; ++a) {
+        ns.blo[a][j] = std::numeric_limits<float>::infinity();
+        ns.bhi[a][j] = -std::numeric_limits<float>::infinity();
+      }
+    ns.valid = true;
+    return true;
+  }
+  return false;
+}
+
 bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {
-  (void)li;
   const LeafTri* blk = t_.tris.data() + lf.tri_begin;
   const std::uint32_t n = lf.tri_count;
   const Vec3d ref = to_d(lf.ref);
@@ -433,7 +392,7 @@ bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std:
     if (step_from_prev(p, node, &w)) return w >= 1;
   }
   if (lf.ref_valid) {
-    if (leaf_winding_ref(p, ref, blk, n, lf, counters, &delta, &on_surface)) {
+    if (leaf_winding_ref(p, ref, blk, n, lf, t_.blocks.data() + t_.leaf_block[li], counters, &delta, &on_surface)) {
       const int w = lf.ref_winding + delta;
       if (track) {
         prev_ok_ = true;

@@ -1,0 +1,327 @@
+// The inside query's per-block leaf kernels (leaf_kernels.hpp): baseline (SSE2 / plain C++) and
+// AVX2 implementations of the same float expressions, and the run-time choice between them.
+// Compiled with -ffp-contract=off (CMakeLists.txt): a fused multiply-add would round once where
+// the other kernels round twice.
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
+
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define EBP_X86 1
+#endif
+
+namespace ebp {
+
+namespace {
+
+static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, n) == 36 &&
+                  offsetof(LeafTri, d) == 48 && offsetof(LeafTri, flags) == 56,
+              "16-byte loads at a, b, c, n stay in the record; n, d contiguous");
+constexpr float kInf = std::numeric_limits<float>::infinity();
+/// Shewchuk's first-stage error bound of orient3d, as in predicates.hpp.
+constexpr double kOrientErrBoundA = 7.7715611723761027e-16;
+
+/// The edge orientations the filter could not decide (`undecided`: bit i for edge i), by
+/// orient3d_exact on the original points, into the mask of edge_signs. Out of line: rare, and
+/// it keeps the kernels' hot path free of calls.
+__attribute__((noinline, cold)) unsigned exact_edges(const Vec3d& p, const Vec3d& q, const float* a, const float* b,
+                                                     const float* c, unsigned undecided) {
+  const float* v[4] = {a, b, c, a};
+  unsigned mask = 0;
+  for (int i = 0; i < 3; ++i)
+    if (undecided >> i & 1u) {
+      ++g_orient_exact_calls;
+      const int e = orient3d_exact(p, q, to_d(v[i]), to_d(v[i + 1]));
+      mask |= e > 0 ? 1u << i : e < 0 ? 16u << i : 0u;
+    }
+  return mask;
+}
+
+inline unsigned low_bits(unsigned m) { return m >= 32 ? ~0u : (1u << m) - 1u; }
+
+// --- baseline ---------------------------------------------------------------------------------
+
+unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+  const float px = p[0], py = p[1], pz = p[2];
+  unsigned gt = 0, lt = 0, pos = 0, deg = 0;
+  unsigned j = 0;
+#if defined(__SSE2__)
+  const __m128 PX = _mm_set1_ps(px), PY = _mm_set1_ps(py), PZ = _mm_set1_ps(pz);
+  const __m128 EP = _mm_set1_ps(eps), EN = _mm_set1_ps(-eps);
+  for (; j + 4 <= m; j += 4) {
+    __m128 r0 = _mm_loadu_ps(blk[j].n), r1 = _mm_loadu_ps(blk[j + 1].n), r2 = _mm_loadu_ps(blk[j + 2].n),
+           r3 = _mm_loadu_ps(blk[j + 3].n);
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // nx, ny, nz, d of the four
+    const __m128 v = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, PX), _mm_mul_ps(r1, PY)), _mm_mul_ps(r2, PZ)), r3);
+    gt |= unsigned(_mm_movemask_ps(_mm_cmpgt_ps(v, EP))) << j;
+    lt |= unsigned(_mm_movemask_ps(_mm_cmplt_ps(v, EN))) << j;
+    _mm_storeu_ps(s + j, v);
+  }
+#endif
+  for (; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    const float v = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    s[j] = v;
+    gt |= unsigned(v > eps) << j;
+    lt |= unsigned(v < -eps) << j;
+  }
+  for (j = 0; j < m; ++j) {
+    pos |= (blk[j].flags & kRefPositive ? 1u : 0u) << j;
+    deg |= (blk[j].flags & kDegenerate ? 1u : 0u) << j;
+  }
+  return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
+}
+
+unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+  unsigned hit = 0;
+#if defined(__SSE2__)
+  // Lane 3 of the vertex rows is not a coordinate: the box's lane 3 lets it always pass.
+  const __m128 LO = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), HI = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    if (t.flags & kDegenerate) continue;
+    const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
+    const __m128 tlo = _mm_min_ps(_mm_min_ps(A, B), C), thi = _mm_max_ps(_mm_max_ps(A, B), C);
+    if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(thi, LO), _mm_cmpgt_ps(tlo, HI))) == 0) hit |= 1u << j;
+  }
+#else
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    if (t.flags & kDegenerate) continue;
+    bool meets = true;
+    for (int a = 0; a < 3; ++a) {
+      const float tl = std::min(std::min(t.a[a], t.b[a]), t.c[a]), th = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
+      meets = meets && !(th < lo[a] || tl > hi[a]);
+    }
+    if (meets) hit |= 1u << j;
+  }
+#endif
+  return hit;
+}
+
+unsigned block_pass_baseline(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
+  unsigned hit = 0;
+#if defined(__SSE2__)
+  // [lo.x, lo.y, lo.z, hi.x] against the query box's hi (lane 3: +inf, never above), and
+  // [lo.z, hi.x, hi.y, hi.z] against its lo (lane 0: -inf, never below): two loads inside the record.
+  static_assert(sizeof(BlockBox) == 24 && offsetof(BlockBox, hi) == 12, "BlockBox: lo then hi, 6 floats");
+  const __m128 QHI = _mm_setr_ps(hi[0], hi[1], hi[2], kInf), QLO = _mm_setr_ps(-kInf, lo[0], lo[1], lo[2]);
+  for (unsigned j = 0; j < m; ++j) {
+    const __m128 L = _mm_loadu_ps(boxes[j].lo), H = _mm_loadu_ps(boxes[j].lo + 2);
+    if (_mm_movemask_ps(_mm_or_ps(_mm_cmpgt_ps(L, QHI), _mm_cmplt_ps(H, QLO))) == 0) hit |= 1u << j;
+  }
+#else
+  for (unsigned j = 0; j < m; ++j) {
+    const BlockBox& b = boxes[j];
+    if (!(b.hi[0] < lo[0] || b.lo[0] > hi[0] || b.hi[1] < lo[1] || b.lo[1] > hi[1] || b.hi[2] < lo[2] || b.lo[2] > hi[2]))
+      hit |= 1u << j;
+  }
+#endif
+  return hit;
+}
+
+/// Shewchuk's orient3d filter (predicates.hpp) for orient3d(p, q, x, y), as -orient3d(q, x, y, p)
+/// (moving p last is an odd permutation), on the differences u = q - p, X = x - p, Y = y - p:
+/// +1 / -1 when the filter decides, 0 when it cannot.
+inline int edge_filter(const double u[3], const double X[3], const double Y[3]) {
+  const double bdxcdy = X[0] * Y[1], cdxbdy = Y[0] * X[1];
+  const double cdxady = Y[0] * u[1], adxcdy = u[0] * Y[1];
+  const double adxbdy = u[0] * X[1], bdxady = X[0] * u[1];
+  const double det = u[2] * (bdxcdy - cdxbdy) + X[2] * (cdxady - adxcdy) + Y[2] * (adxbdy - bdxady);
+  const double permanent = (std::fabs(bdxcdy) + std::fabs(cdxbdy)) * std::fabs(u[2]) +
+                           (std::fabs(cdxady) + std::fabs(adxcdy)) * std::fabs(X[2]) +
+                           (std::fabs(adxbdy) + std::fabs(bdxady)) * std::fabs(Y[2]);
+  const double errbound = kOrientErrBoundA * permanent;
+  if (det > errbound) return 1;
+  if (-det > errbound) return -1;
+  return 0;
+}
+
+unsigned edge_signs_baseline(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]) {
+  const double u[3] = {q.x - p.x, q.y - p.y, q.z - p.z};
+  const double D[3][3] = {{double(a[0]) - p.x, double(a[1]) - p.y, double(a[2]) - p.z},
+                          {double(b[0]) - p.x, double(b[1]) - p.y, double(b[2]) - p.z},
+                          {double(c[0]) - p.x, double(c[1]) - p.y, double(c[2]) - p.z}};
+  unsigned mask = 0, undecided = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int e = edge_filter(u, D[i], D[(i + 1) % 3]);
+    mask |= e > 0 ? 1u << i : e < 0 ? 16u << i : 0u;
+    undecided |= (e == 0 ? 1u : 0u) << i;
+  }
+  return undecided ? mask | exact_edges(p, q, a, b, c, undecided) : mask;
+}
+
+// --- AVX2 -------------------------------------------------------------------------------------
+#if defined(EBP_X86)
+
+#define EBP_AVX2 __attribute__((target("avx2")))
+
+/// The flags of blk[0, m) in 8 lanes (lanes >= m: 0, not read).
+EBP_AVX2 inline __m256i gather_flags(const LeafTri* blk, unsigned m) {
+  const __m256i idx = _mm256_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112);  // 64-byte records, in ints
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i live = _mm256_cmpgt_epi32(_mm256_set1_epi32(int(m)), lane);
+  return _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(&blk[0].flags), idx, live, 4);
+}
+
+/// Row j of 8 records at byte offset `off` (16 bytes), zero for j >= m (never read past the block).
+template <std::size_t Off>
+EBP_AVX2 inline __m256 rows(const LeafTri* blk, unsigned m, unsigned j) {
+  auto row = [&](unsigned i) {
+    return i < m ? _mm_loadu_ps(reinterpret_cast<const float*>(reinterpret_cast<const char*>(blk + i) + Off))
+                 : _mm_setzero_ps();
+  };
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(row(j)), row(j + 4), 1);
+}
+
+EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+  // Records j and j + 4 share a row register; the 4x4 transpose per 128-bit half gives lane j =
+  // triangle j.
+  const __m256 R0 = rows<offsetof(LeafTri, n)>(blk, m, 0), R1 = rows<offsetof(LeafTri, n)>(blk, m, 1),
+               R2 = rows<offsetof(LeafTri, n)>(blk, m, 2), R3 = rows<offsetof(LeafTri, n)>(blk, m, 3);
+  const __m256 t0 = _mm256_unpacklo_ps(R0, R1), t1 = _mm256_unpackhi_ps(R0, R1);
+  const __m256 t2 = _mm256_unpacklo_ps(R2, R3), t3 = _mm256_unpackhi_ps(R2, R3);
+  const __m256 nx = _mm256_shuffle_ps(t0, t2, 0x44), ny = _mm256_shuffle_ps(t0, t2, 0xEE);
+  const __m256 nz = _mm256_shuffle_ps(t1, t3, 0x44), d = _mm256_shuffle_ps(t1, t3, 0xEE);
+  const __m256 v = _mm256_sub_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_set1_ps(p[0])), _mm256_mul_ps(ny, _mm256_set1_ps(p[1]))),
+                    _mm256_mul_ps(nz, _mm256_set1_ps(p[2]))),
+      d);
+  _mm256_storeu_ps(s, v);
+  const unsigned gt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(eps), _CMP_GT_OQ)));
+  const unsigned lt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(-eps), _CMP_LT_OQ)));
+  const __m256i fl = gather_flags(blk, m);
+  const unsigned pos = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 31))));  // kRefPositive
+  const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 30))));  // kDegenerate
+  return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
+}
+
+EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+  // Two triangles per register (j in the low half, j + 4 in the high half); lane 3 of each half
+  // is not a coordinate and always passes.
+  const __m128 lo4 = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), hi4 = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
+  const __m256 LO = _mm256_insertf128_ps(_mm256_castps128_ps256(lo4), lo4, 1);
+  const __m256 HI = _mm256_insertf128_ps(_mm256_castps128_ps256(hi4), hi4, 1);
+  unsigned miss = 0;
+  for (unsigned j = 0; j < 4 && j < m; ++j) {
+    const __m256 A = rows<offsetof(LeafTri, a)>(blk, m, j), B = rows<offsetof(LeafTri, b)>(blk, m, j),
+                 C = rows<offsetof(LeafTri, c)>(blk, m, j);
+    const __m256 tlo = _mm256_min_ps(_mm256_min_ps(A, B), C), thi = _mm256_max_ps(_mm256_max_ps(A, B), C);
+    const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(thi, LO, _CMP_LT_OQ),
+                                                                  _mm256_cmp_ps(tlo, HI, _CMP_GT_OQ))));
+    miss |= ((out & 15u) ? 1u : 0u) << j;
+    miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
+  }
+  const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(gather_flags(blk, m), 30))));
+  return ~(miss | deg) & low_bits(m);
+}
+
+
+EBP_AVX2 inline __m256d abs_pd(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
+
+EBP_AVX2 unsigned block_pass_avx2(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
+  // As the baseline, two boxes per register: j in the low half, j + 4 in the high half.
+  const __m128 qhi = _mm_setr_ps(hi[0], hi[1], hi[2], kInf), qlo = _mm_setr_ps(-kInf, lo[0], lo[1], lo[2]);
+  const __m256 QHI = _mm256_insertf128_ps(_mm256_castps128_ps256(qhi), qhi, 1);
+  const __m256 QLO = _mm256_insertf128_ps(_mm256_castps128_ps256(qlo), qlo, 1);
+  auto half = [&](unsigned i, int off) {
+    return i < m ? _mm_loadu_ps(boxes[i].lo + off) : _mm_setzero_ps();
+  };
+  unsigned miss = 0;
+  for (unsigned j = 0; j < 4 && j < m; ++j) {
+    const __m256 L = _mm256_insertf128_ps(_mm256_castps128_ps256(half(j, 0)), half(j + 4, 0), 1);
+    const __m256 H = _mm256_insertf128_ps(_mm256_castps128_ps256(half(j, 2)), half(j + 4, 2), 1);
+    const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(L, QHI, _CMP_GT_OQ),
+                                                                  _mm256_cmp_ps(H, QLO, _CMP_LT_OQ))));
+    miss |= ((out & 15u) ? 1u : 0u) << j;
+    miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
+  }
+  return ~miss & low_bits(m);
+}
+
+EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]) {
+  // Lane i = edge i: X = (a, b, c) - p, Y = (b, c, a) - p, the filter of edge_filter lane-wise
+  // (same operations; lane 3 is zero and ignored).
+  // [p.x, p.y, p.z, 0] by two loads (a lane-wise set compiles to a VEX vmovq that valgrind 3.19
+  // cannot decode, and callgrind measures this code).
+  static_assert(sizeof(Vec3d) == 24 && offsetof(Vec3d, z) == 16, "Vec3d: x, y, z contiguous");
+  const __m256d P = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&p.x)), _mm_load_sd(&p.z), 1);
+  const __m256d A = _mm256_sub_pd(_mm256_cvtps_pd(_mm_loadu_ps(a)), P);  // lane 3: junk
+  const __m256d B = _mm256_sub_pd(_mm256_cvtps_pd(_mm_loadu_ps(b)), P);
+  const __m256d C = _mm256_sub_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), P);
+  const __m256d Z = _mm256_setzero_pd();
+  const __m256d t0 = _mm256_unpacklo_pd(A, B), t1 = _mm256_unpackhi_pd(A, B);  // [Ax Bx Az Bz], [Ay By . .]
+  const __m256d t2 = _mm256_unpacklo_pd(C, Z), t3 = _mm256_unpackhi_pd(C, Z);  // [Cx 0 Cz 0], [Cy 0 . .]
+  const __m256d Xx = _mm256_permute2f128_pd(t0, t2, 0x20), Xy = _mm256_permute2f128_pd(t1, t3, 0x20),
+                Xz = _mm256_permute2f128_pd(t0, t2, 0x31);
+  const __m256d Yx = _mm256_permute4x64_pd(Xx, _MM_SHUFFLE(3, 0, 2, 1)),
+                Yy = _mm256_permute4x64_pd(Xy, _MM_SHUFFLE(3, 0, 2, 1)),
+                Yz = _mm256_permute4x64_pd(Xz, _MM_SHUFFLE(3, 0, 2, 1));
+  const __m256d ux = _mm256_set1_pd(q.x - p.x), uy = _mm256_set1_pd(q.y - p.y), uz = _mm256_set1_pd(q.z - p.z);
+  const __m256d bdxcdy = _mm256_mul_pd(Xx, Yy), cdxbdy = _mm256_mul_pd(Yx, Xy);
+  const __m256d cdxady = _mm256_mul_pd(Yx, uy), adxcdy = _mm256_mul_pd(ux, Yy);
+  const __m256d adxbdy = _mm256_mul_pd(ux, Xy), bdxady = _mm256_mul_pd(Xx, uy);
+  const __m256d det = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(uz, _mm256_sub_pd(bdxcdy, cdxbdy)), _mm256_mul_pd(Xz, _mm256_sub_pd(cdxady, adxcdy))),
+      _mm256_mul_pd(Yz, _mm256_sub_pd(adxbdy, bdxady)));
+  const __m256d sign = _mm256_set1_pd(-0.0);  // -det below
+  const __m256d perm = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(abs_pd(bdxcdy), abs_pd(cdxbdy)), abs_pd(uz)),
+                    _mm256_mul_pd(_mm256_add_pd(abs_pd(cdxady), abs_pd(adxcdy)), abs_pd(Xz))),
+      _mm256_mul_pd(_mm256_add_pd(abs_pd(adxbdy), abs_pd(bdxady)), abs_pd(Yz)));
+  const __m256d err = _mm256_mul_pd(_mm256_set1_pd(kOrientErrBoundA), perm);
+  const unsigned pos = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(det, err, _CMP_GT_OQ))) & 7u;
+  const unsigned neg = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_xor_pd(det, sign), err, _CMP_GT_OQ))) & 7u;
+  const unsigned undecided = ~(pos | neg) & 7u;
+  return undecided ? pos | neg << 4 | exact_edges(p, q, a, b, c, undecided) : pos | neg << 4;
+}
+
+#endif  // EBP_X86
+
+// --- the choice -------------------------------------------------------------------------------
+
+LeafKernelTable make(LeafKernels k) {
+#if defined(EBP_X86)
+  if (k == LeafKernels::avx2 && cpu_has_avx2())
+    return {plane_pass_avx2, box_pass_avx2, block_pass_avx2, edge_signs_avx2, LeafKernels::avx2};
+#endif
+  (void)k;
+  return {plane_pass_baseline, box_pass_baseline, block_pass_baseline, edge_signs_baseline, LeafKernels::baseline};
+}
+
+LeafKernelTable& current() {
+  static LeafKernelTable k = make(LeafKernels::avx2);
+  return k;
+}
+
+}  // namespace
+
+bool cpu_has_avx2() {
+#if defined(EBP_X86)
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return has;
+#else
+  return false;
+#endif
+}
+
+LeafKernels leaf_kernels() { return current().kind; }
+
+LeafKernels set_leaf_kernels(LeafKernels k) {
+  const LeafKernels before = current().kind;
+  current() = make(k);
+  return before;
+}
+
+const LeafKernelTable& leaf_kernel_table() { return current(); }
+
+}  // namespace ebp

@@ -1,0 +1,244 @@
+// The inside query's leaf kernels (core/leaf_kernels.hpp): the AVX2 and baseline kernels give
+// the same bits as the plain float expressions, and the inside answers and counters do not
+// depend on which one runs, coherent or not, on real, grazing and stress-style inputs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "harness/core/mesh.hpp"
+#include "harness/io/mesh_io.hpp"
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/ebp_test_support.hpp"
+
+using namespace ebp_test;
+
+namespace {
+
+/// Restores the kernels in use when it goes out of scope.
+struct KernelsGuard {
+  LeafKernels before = leaf_kernels();
+  ~KernelsGuard() { set_leaf_kernels(before); }
+};
+
+/// The kernels' promise, written out one triangle at a time.
+unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+  unsigned mask = 0;
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    float v = t.n[0] * p[0];
+    v = v + t.n[1] * p[1];
+    v = v + t.n[2] * p[2];
+    v = v - t.d;
+    s[j] = v;
+    const bool ref_pos = t.flags & kRefPositive;
+    const bool skip = (t.flags & kDegenerate) || (ref_pos && v > eps) || (!ref_pos && v < -eps);
+    if (!skip) mask |= 1u << j;
+  }
+  return mask;
+}
+unsigned box_mask_spelled_out(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+  unsigned mask = 0;
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    bool meets = !(t.flags & kDegenerate);
+    for (int a = 0; a < 3; ++a)
+      meets = meets && std::max({t.a[a], t.b[a], t.c[a]}) >= lo[a] && std::min({t.a[a], t.b[a], t.c[a]}) <= hi[a];
+    if (meets) mask |= 1u << j;
+  }
+  return mask;
+}
+
+unsigned block_mask_spelled_out(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
+  unsigned mask = 0;
+  for (unsigned j = 0; j < m; ++j) {
+    bool meets = true;
+    for (int a = 0; a < 3; ++a) meets = meets && boxes[j].hi[a] >= lo[a] && boxes[j].lo[a] <= hi[a];
+    if (meets) mask |= 1u << j;
+  }
+  return mask;
+}
+
+Mesh reversed(Mesh m) {
+  for (auto& f : m.triangles) std::swap(f[1], f[2]);
+  return m;
+}
+Mesh joined(const Mesh& a, const Mesh& b) {
+  Mesh m = a;
+  const auto off = std::uint32_t(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto f : b.triangles) m.triangles.push_back({f[0] + off, f[1] + off, f[2] + off});
+  return m;
+}
+
+/// Query points that graze the structure: the triangles' vertices exactly, points on their edges
+/// and faces, points on leaf-cell boundaries, and a haptic-like walk of small steps over the
+/// surface with jumps, besides uniform and near-surface samples.
+std::vector<Vec3d> grazing_points(const Octree& t, const Reference& ref, std::uint32_t seed) {
+  std::vector<Vec3d> pts = sample_points(ref, 200, 200, seed);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0, 1);
+  const double cell = t.cell_size(t.leaf_level), diag = ref.bounds().diagonal();
+  Vec3d p = ref.v[ref.f[0][0]];
+  for (int i = 0; i < 1500; ++i) {
+    const auto& f = ref.f[rng() % ref.f.size()];
+    const Vec3d a = ref.v[f[0]], b = ref.v[f[1]], c = ref.v[f[2]];
+    const double u = U(rng), v = U(rng) * (1 - u);
+    switch (i % 6) {
+      case 0: p = ref.v[f[rng() % 3]]; break;                        // a vertex
+      case 1: p = a + (b - a) * u; break;                            // an edge
+      case 2: p = a + (b - a) * u + (c - a) * v; break;              // a face
+      case 3: {                                                      // a leaf-cell boundary
+        const int ax = int(rng() % 3);
+        p[ax] = t.root_lo[ax] + std::round((p[ax] - t.root_lo[ax]) / cell) * cell;
+        break;
+      }
+      case 4: p += Vec3d(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5) * (2.5 * cell); break;  // a jump
+      default: p += Vec3d(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5) * (1e-3 * diag); break;  // a step
+    }
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+struct Answers {
+  std::vector<char> inside;
+  QueryCounters c;
+};
+Answers run(const Octree& t, bool coherent, LeafKernels k, const std::vector<Vec3d>& pts) {
+  KernelsGuard g;
+  set_leaf_kernels(k);
+  Query q(t, coherent);
+  Answers r;
+  for (const Vec3d& p : pts) r.inside.push_back(q.inside(p));
+  r.c = q.counters;
+  return r;
+}
+std::string counters(const QueryCounters& c) {
+  return std::to_string(c.nodes_visited) + " " + std::to_string(c.planes_tested) + " " +
+         std::to_string(c.triangles_tested) + " " + std::to_string(c.exact_fallbacks);
+}
+
+}  // namespace
+
+// Each kernel gives, on every block of real leaves (full and partial), the bits of the float
+// expressions written out: plane values, masks, triangle and block box masks (boxes that touch
+// triangle coordinates exactly included), and orient3d's signs for the edge orientations
+// (segments from a vertex through another: exact zeros).
+TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
+  KernelsGuard g;
+  std::vector<LeafKernels> kinds{LeafKernels::baseline};
+  if (cpu_has_avx2()) kinds.push_back(LeafKernels::avx2);
+  for (const char* name : {"cow.obj", "fandisk.obj"}) {
+    const Mesh m = bvhbench::load_mesh(shared_mesh(name));
+    const Octree t = build(m);
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> U(-1, 1);
+    std::size_t blocks = 0, partial = 0, nonzero = 0, edge_zero = 0, j0 = 0;
+    for (const Leaf& lf : t.leaves) {
+      const double half = 0.5 * t.cell_size(t.leaf_level);
+      for (std::uint32_t k = 0; k < lf.tri_count; k += kBlockTris) {
+        const LeafTri* blk = t.tris.data() + lf.tri_begin + k;
+        const unsigned n = std::min(lf.tri_count - k, kBlockTris);
+        ++blocks;
+        partial += n < kBlockTris;
+        for (int i = 0; i < 8; ++i) {
+          // a point of the cell, or a vertex of the block (its plane value is tiny: the exact stage)
+          float p[3], lo[3], hi[3];
+          const LeafTri& v = blk[rng() % n];
+          for (int a = 0; a < 3; ++a) {
+            p[a] = i < 6 ? float(U(rng) * half) : v.a[a] - lf.centre[a];
+            lo[a] = i % 2 ? v.b[a] : float(lf.centre[a] + U(rng) * half);
+            hi[a] = i % 2 ? v.b[a] : lo[a] + float(0.3 * half);
+          }
+          float want_s[8], s[8];
+          const unsigned want = plane_mask_spelled_out(blk, n, p, lf.eps, want_s);
+          const unsigned want_box = box_mask_spelled_out(blk, n, lo, hi);
+          nonzero += want != 0;
+          const unsigned nb = std::min((lf.tri_count - k + kBlockTris - 1) / kBlockTris, 8u);
+          const BlockBox* boxes = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()] + k / kBlockTris;
+          const unsigned want_blocks = block_mask_spelled_out(boxes, nb, lo, hi);
+          // a segment from a vertex of the block (often through its edges: exact ties)
+          const Vec3d sp = to_d(v.a), sq = i < 4 ? to_d(v.c) : Vec3d(lf.centre[0] + U(rng) * half, lf.centre[1] + U(rng) * half,
+                                                                      lf.centre[2] + U(rng) * half);
+          const LeafTri& e = blk[(j0++) % n];
+          const int want_e[3] = {orient3d(sp, sq, to_d(e.a), to_d(e.b)), orient3d(sp, sq, to_d(e.b), to_d(e.c)),
+                                 orient3d(sp, sq, to_d(e.c), to_d(e.a))};
+          for (LeafKernels kind : kinds) {
+            set_leaf_kernels(kind);
+            ASSERT_EQ(leaf_kernels(), kind);
+            const LeafKernelTable& K = leaf_kernel_table();
+            ASSERT_EQ(K.kind, kind);
+            ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s), want) << name << " kernel " << int(kind);
+            ASSERT_EQ(0, std::memcmp(s, want_s, n * sizeof(float))) << name << " kernel " << int(kind);
+            ASSERT_EQ(K.box_pass(blk, n, lo, hi), want_box) << name << " kernel " << int(kind);
+            ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
+            const unsigned es = K.edge_signs(sp, sq, e.a, e.b, e.c);
+            for (int i = 0; i < 3; ++i)
+              ASSERT_EQ(int(es >> i & 1u) - int(es >> (4 + i) & 1u), want_e[i]) << name << " kernel " << int(kind);
+            edge_zero += ((es | es >> 4) & 7u) != 7u;
+          }
+        }
+      }
+    }
+    EXPECT_GT(partial, 10u) << name;
+    EXPECT_GT(edge_zero, 100u) << name;  // segments through vertices: the exact fallback ran
+    EXPECT_GT(nonzero, blocks) << name;
+  }
+  if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
+}
+
+// Inside answers and every counter are the same with either kernel, coherent or not, on closed
+// meshes, an open one, and stress-style meshes (duplicated faces, zero-area faces, nested shells
+// of both orientations); off the surface the answers are the oracle's on the closed ones.
+TEST(EbpLeafKernels, InsideIsTheSameWithEitherKernel) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (const char* name : {"cow.obj", "fandisk.obj", "rocker-arm.obj", "spot.obj"})
+    meshes.push_back({name, bvhbench::load_mesh(shared_mesh(name))});
+  Mesh dup = icosphere(3);
+  for (std::size_t i = 0, nf = dup.triangles.size(); i < nf; i += 3) dup.triangles.push_back(dup.triangles[i]);
+  meshes.push_back({"duplicated faces", dup});
+  Mesh zero = icosphere(3);
+  zero.triangles.push_back({0, 0, 0});
+  zero.triangles.push_back({1, 2, 1});
+  meshes.push_back({"zero-area faces", zero});
+  meshes.push_back({"nested shells", joined(icosphere(3, 1.0), icosphere(3, 0.5))});
+  meshes.push_back({"hollow shell", joined(icosphere(3, 1.0), reversed(icosphere(3, 0.5)))});
+  const bool avx2 = cpu_has_avx2();
+  for (auto& [name, m] : meshes) {
+    const Octree t = build(m);
+    const Reference ref(m.vertices, m.triangles);
+    const double diag = ref.bounds().diagonal();
+    const std::vector<Vec3d> pts = grazing_points(t, ref, 5);
+    std::vector<int> oracle(pts.size(), -1);  // -1: on (or all but on) the surface, or open
+    if (t.closed)
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (ref.dist(pts[i]) >= 1e-7 * diag) oracle[i] = ref.winding(pts[i]) > 0.5;
+    if (name != "spot.obj" && name != "duplicated faces") {
+      ASSERT_TRUE(t.closed) << name;  // then the oracle applies
+    }
+    if (t.closed) {
+      EXPECT_GT(std::count_if(oracle.begin(), oracle.end(), [](int o) { return o >= 0; }), 500) << name;
+    }
+    for (bool coherent : {false, true}) {
+      const Answers base = run(t, coherent, LeafKernels::baseline, pts);
+      if (avx2) {
+        const Answers fast = run(t, coherent, LeafKernels::avx2, pts);
+        ASSERT_TRUE(base.inside == fast.inside) << name << " coherent " << coherent;
+        EXPECT_EQ(counters(base.c), counters(fast.c)) << name << " coherent " << coherent;
+      }
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (oracle[i] >= 0) {
+          ASSERT_EQ(int(base.inside[i]), oracle[i]) << name << " coherent " << coherent << " point " << i;
+        }
+    }
+  }
+}
