@@ -49,6 +49,11 @@ PythonRuntime* start() {
   try {
     py::module_ sys = py::module_::import("sys");
     sys.attr("argv") = py::make_tuple("bvhbench");  // some libraries read sys.argv[0]
+    // Extension modules bind to their own libraries first (RTLD_DEEPBIND). Without it a wheel's
+    // library resolves symbols from what bvhbench already loaded: embreex's calls into its
+    // Embree 4 went to the executable's Embree 3 (same names, other ABI) and crashed.
+    py::module_ os = py::module_::import("os");
+    sys.attr("setdlopenflags")(sys.attr("getdlopenflags")().cast<int>() | os.attr("RTLD_DEEPBIND").cast<int>());
     sys.attr("path").attr("insert")(0, BVHBENCH_PYTHON_HOST_DIR);
     rt->host = py::module_::import("bvhbench_python_host");
     g_host = &rt->host;

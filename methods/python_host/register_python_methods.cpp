@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include <pybind11/stl.h>
+
 #include "harness/core/registry.hpp"
 #include "python_method.hpp"
 #include "python_runtime.hpp"
@@ -116,6 +118,8 @@ void bvhbench_register_python_host(bvhbench::Registry& r) {
       r.add(method_info(d, folder));
     } catch (py::error_already_set& e) {
       r.add_left_out(name, python_error_text(e));
+    } catch (const py::cast_error& e) {
+      r.add_left_out(name, folder + "/method.py: a declaration of an unexpected type (" + std::string(e.what()) + ")");
     }
   }
 }
