@@ -17,6 +17,7 @@ import sys
 
 DECLARED = ("DESCRIPTION", "REQUIRES", "CAPABILITIES", "PARAMETERS")
 PARAM_TYPES = ("integer", "real", "boolean", "text", "choice")
+TYPE_ALIASES = {"int": "integer", "bool": "boolean"}  # the names `bvhbench methods` shows
 CAPABILITY_KEYS = ("inside", "distance", "closest_triangle")
 
 
@@ -115,6 +116,7 @@ def read_declarations(folder):
         if not isinstance(p, dict) or not {"name", "type", "default", "help"} <= set(p):
             raise DeclarationError(f"{path}: PARAMETERS[{i}] must be a dict with name, type, "
                                    "default and help")
+        p = dict(p, type=TYPE_ALIASES.get(p["type"], p["type"]))
         if p["type"] not in PARAM_TYPES:
             raise DeclarationError(f"{path}: parameter {p['name']!r}: type must be one of {PARAM_TYPES}")
         if p["name"] == "batch":

@@ -149,7 +149,7 @@ def test_toy_in_a_temporary_folder_is_listed_with_its_parameters(host, toy):
     params = {p["name"]: p for p in m["params"]}
     assert params["scale"]["type"] == "real" and params["scale"]["default"] == "1.0"
     assert params["mode"]["choices"] == ["plain", "raise", "shape", "nan"]
-    assert params["batch"]["type"] == "boolean" and params["batch"]["default"] == "false"
+    assert params["batch"]["type"] == "bool" and params["batch"]["default"] == "false"
     run("run", "--mesh", MESH, "--method", "toy:scale=11", "--queries", "x.npy", "--query", "inside",
         env=with_methods(toy), check=2)
 
@@ -238,9 +238,11 @@ def test_malformed_declarations_leave_the_method_out_with_a_note(host, toy):
 # (spec, exact): where a method is exact on this closed mesh, no
 # query away from the surface may be wrong; where not (the fast winding number), the accuracy
 # block is what the stability matrix reads, and only the distance magnitude is checked here.
+# The pseudonormal is not exact here: on cow.obj one random point of 150, 0.9 from the surface,
+# gets the wrong side, and libigl's own signed_distance(..., PSEUDONORMAL) answers the same.
 LIBRARY_SPECS = [
     ("libigl", True),
-    ("libigl:sign_type=pseudonormal", True),
+    ("libigl:sign_type=pseudonormal", False),
     ("libigl:sign_type=fast_winding_number", False),
     ("trimesh", True),
     ("trimesh:ray=native", True),
