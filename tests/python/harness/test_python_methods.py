@@ -258,24 +258,25 @@ def test_library_methods_answer_like_the_oracle(host, data, tmp_path, spec, exac
     if name not in methods:
         pytest.skip(f"{name} not in this build: {notes.strip()}")
     spec = spec + ("," if ":" in spec else ":") + "batch=true" if batch else spec
-    for kind in ("random", "haptic"):
-        for query in ("inside", "distance"):
-            p, r, a = run_job(None, spec, query, data, tmp_path, kind=kind)
-            if r["status"] == "unsupported":  # trimesh's Embree rays without embreex
-                assert "embreex" in r["message"]
-                pytest.skip(r["message"])
-            assert r["status"] == "ok", r["message"]
-            assert r["queries"]["batch"] is batch
-            acc = r["accuracy"]
-            diagonal = r["job"]["mesh"]["diagonal"]
-            if query == "inside":
-                if exact:
-                    assert acc["inside"]["wrong_far"] == 0, (kind, acc)
-                continue
-            # The closest point within float32 of the oracle's (fcpw works in float32).
-            d = acc["distance"]
-            assert d["closest_error"]["p99"] <= 1e-5 * diagonal, (kind, d)
-            assert d["triangle_agreement"] >= 0.99, (kind, d)
+    # Inside on random points and distance along the haptic path (the paper table's questions;
+    # each run starts Python and builds the structure, so two runs per row keep the test short).
+    for kind, query in (("random", "inside"), ("haptic", "distance")):
+        p, r, a = run_job(None, spec, query, data, tmp_path, kind=kind)
+        if r["status"] == "unsupported":  # trimesh's Embree rays without embreex
+            assert "embreex" in r["message"]
+            pytest.skip(r["message"])
+        assert r["status"] == "ok", r["message"]
+        assert r["queries"]["batch"] is batch
+        acc = r["accuracy"]
+        diagonal = r["job"]["mesh"]["diagonal"]
+        if query == "inside":
             if exact:
-                assert d["abs_error"]["max"] <= 1e-5 * diagonal, (kind, d)
-                assert d["sign_wrong"] == 0, (kind, d)
+                assert acc["inside"]["wrong_far"] == 0, (kind, acc)
+            continue
+        # The closest point within float32 of the oracle's (fcpw works in float32).
+        d = acc["distance"]
+        assert d["closest_error"]["p99"] <= 1e-5 * diagonal, (kind, d)
+        assert d["triangle_agreement"] >= 0.99, (kind, d)
+        if exact:
+            assert d["abs_error"]["max"] <= 1e-5 * diagonal, (kind, d)
+            assert d["sign_wrong"] == 0, (kind, d)
