@@ -19,7 +19,8 @@ SUDO        := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 # python3-venv: Debian's python3 makes virtual environments only with it.
 APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
-  libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev
+  libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev \
+  python3-dev pybind11-dev
 
 .PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper huge rebaseline fixture report clean distclean
 

@@ -367,18 +367,31 @@ def representative_configs(jobs):
     return chosen
 
 
-def _without_coherent(key):
-    return ",".join(p for p in key.split(",") if p and not p.startswith("coherent="))
+def _without_variant(key):
+    return ",".join(p for p in key.split(",")
+                    if p and not p.startswith("coherent=") and not p.startswith("batch="))
 
 
 def is_coherent(key):
     return "coherent=true" in key.split(",")
 
 
+def is_batch(key):
+    """A Python method's batch row (batch=true): the whole query set answered per call."""
+    return "batch=true" in key.split(",")
+
+
+def config_label(config, key):
+    """A configuration as tables show it: batch rows marked, so that no one reads a per-call
+    throughput as a per-query one."""
+    return config + (" [batch]" if is_batch(key) else "")
+
+
 def shown_configs(jobs):
     """[(method, params_key)] that stand for each method in scaling charts and tables: the
-    representative configuration, plus its path-coherent variant (coherent=true) when the
-    suite ran one, since a coherent method is its own row (docs/architecture.md, "Contracts": queries)."""
+    representative configuration, plus its path-coherent variant (coherent=true) and its batch
+    variant (batch=true) when the suite ran them, since each is its own row
+    (docs/architecture.md, "Contracts": queries)."""
     reps = representative_configs(jobs)
     keys = {}
     for j in jobs:
@@ -388,6 +401,6 @@ def shown_configs(jobs):
         rep = reps[method]
         out.append((method, rep))
         out += [(method, k) for k in sorted(keys[method])
-                if k != rep and is_coherent(k) and not is_coherent(rep)
-                and _without_coherent(k) == _without_coherent(rep)]
+                if k != rep and (is_coherent(k) and not is_coherent(rep) or is_batch(k) and not is_batch(rep))
+                and _without_variant(k) == _without_variant(rep)]
     return out

@@ -7,7 +7,7 @@ import io
 
 import fmt
 from metrics import METRICS
-from results_io import (is_coherent, median, method_sort_key, representative_configs,
+from results_io import (config_label, is_coherent, median, method_sort_key, representative_configs,
                         shown_configs)
 
 # Accuracy tolerances of the "Accuracy warnings" section.
@@ -182,7 +182,7 @@ def paper_rows(rs):
                                if j.get("structure.max_depth") is not None), None)
             row = {
                 "host": host, "mesh": mesh, "triangles": rs.mesh_triangles(mesh), "method": method,
-                "config": js[0].config, "coherent": is_coherent(key), "levels": levels,
+                "config": config_label(js[0].config, key), "coherent": is_coherent(key), "levels": levels,
                 "build_s": median(j.build_seconds for j in ok),
                 "structure_bytes": median(j.structure_bytes for j in ok),
                 "file_bytes": median(j.file_bytes for j in ok),
@@ -266,6 +266,9 @@ def paper_notes(rs):
             "PiS = point-in-solid (`inside`). Ratios above 1× favour the EBP-Octree: "
             "rates are EBP/peer, build time and memory are peer/EBP; a path-coherent peer "
             "(coherent=true) is compared with the EBP-Octree's coherent variant when it ran. "
+            "[batch] marks a Python method answering the whole query set per call "
+            "(batch=true): its rate is what a Python caller gets from arrays, not a per-query "
+            "latency; the same method without [batch] is called once per query. "
             "A status instead of a rate means that job did not finish ok (see the non-ok table); "
             f"{WRONG_MARK} marks a rate whose answers were wrong (see Accuracy warnings). "
             "Published figures: " + PAPER_REFERENCE["citation"] + ": 2.5 kHz random and 32 kHz "
@@ -283,7 +286,7 @@ def paper_notes(rs):
 # ---------------------------------------------------------------------------------------------
 def failed_table(rs):
     header = ["Status", "Method", "Mesh", "Query", "Path", "Message", "Job"]
-    rows = [[j.status, j.config, j.mesh, j.query, j.kind, j.message or "(no message)", j.id]
+    rows = [[j.status, config_label(j.config, j.params_key), j.mesh, j.query, j.kind, j.message or "(no message)", j.id]
             for j in sorted(rs.failed_jobs, key=lambda j: (j.status, method_sort_key(j.method),
                                                            j.mesh, j.query, j.kind))]
     return header, rows

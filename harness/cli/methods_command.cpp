@@ -50,6 +50,10 @@ void add_methods_command(CLI::App& app) {
       for (auto& m : reg.methods())
         if (*all || !m.testing_only) out.push_back(method_json(m));
       std::cout << out.dump(2) << "\n";
+      // The array stays the listing scripts read; what is left out is said on stderr.
+      for (const auto& note : reg.notes()) std::cerr << "note: " << note << "\n";
+      for (const auto& [name, why] : reg.left_out())
+        std::cerr << "note: method " << name << " left out: " << why << "\n";
       return;
     }
     for (auto& m : reg.methods()) {
@@ -82,6 +86,9 @@ void add_methods_command(CLI::App& app) {
       }
       std::cout << "\n";
     }
+    for (const auto& note : reg.notes()) std::cout << "note: " << note << "\n";
+    for (const auto& [name, why] : reg.left_out())
+      std::cout << "note: method " << name << " left out: " << why << "\n";
   });
 }
 

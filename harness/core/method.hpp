@@ -75,6 +75,17 @@ class Method {
   /// Signed distance, closest point, contact normal, closest triangle. Default: unsupported.
   virtual DistanceResult distance(const Vec3d& p);
 
+  /// Whether this instance answers the whole query set per call (a Python method's
+  /// `batch=true`). The harness then calls inside_batch()/distance_batch() instead of
+  /// inside()/distance(), times whole-set calls, and records no per-query latency: one call
+  /// answers every query, so no query has a latency of its own.
+  virtual bool answers_in_batches() const { return false; }
+  /// Every point of `points`, in order: `inside` gets points.size() bytes (1 inside, 0 outside).
+  /// Default: unsupported.
+  virtual void inside_batch(const std::vector<Vec3d>& points, std::vector<std::uint8_t>& inside);
+  /// Every point of `points`, in order: `out` gets points.size() answers. Default: unsupported.
+  virtual void distance_batch(const std::vector<Vec3d>& points, std::vector<DistanceResult>& out);
+
   /// Whether this instance (with its parameters) answers q. Defaults to the registered caps.
   virtual bool supports(QueryType q) const = 0;
 

@@ -18,6 +18,12 @@ bool Method::inside(const Vec3d&) { throw UnsupportedError("inside queries are n
 DistanceResult Method::distance(const Vec3d&) {
   throw UnsupportedError("distance queries are not supported");
 }
+void Method::inside_batch(const std::vector<Vec3d>&, std::vector<std::uint8_t>&) {
+  throw UnsupportedError("inside queries in batches are not supported");
+}
+void Method::distance_batch(const std::vector<Vec3d>&, std::vector<DistanceResult>&) {
+  throw UnsupportedError("distance queries in batches are not supported");
+}
 
 void Registry::add(MethodInfo info) {
   if (find(info.name)) throw std::logic_error("method registered twice: " + info.name);
@@ -25,6 +31,10 @@ void Registry::add(MethodInfo info) {
 }
 
 void Registry::add_command(CommandInfo cmd) { commands_.push_back(std::move(cmd)); }
+
+void Registry::add_left_out(const std::string& name, const std::string& why) {
+  left_out_.emplace_back(name, why);
+}
 
 const MethodInfo* Registry::find(const std::string& name) const {
   for (auto& m : methods_)
@@ -43,6 +53,11 @@ MethodSpec Registry::describe(const std::string& text) const {
   }
   const MethodInfo* m = find(spec.name);
   if (!m) {
+    for (const auto& [name, why] : left_out_)
+      if (name == spec.name) {
+        spec.problem = "method '" + name + "' is not available in this build: " + why;
+        return spec;
+      }
     std::string known;
     for (auto& k : methods_)
       if (!k.testing_only) known += (known.empty() ? "" : ", ") + k.name;

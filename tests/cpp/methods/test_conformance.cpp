@@ -19,7 +19,8 @@
 //  - exact_float32 (ebp_octree): exact on the float32-rounded mesh, so bit for bit with
 //    brute_force built on that mesh: the same |distance|, closest point and triangle (the
 //    lexicographic minimum of squared distance and index); the same inside away from the surface.
-//  - float32 (cgal_aabb, embree, and any new method): the checks of expect_matches_brute_force
+//  - float32 (cgal_aabb, embree, the Python methods libigl, trimesh and fcpw, and any new
+//    method; libigl and trimesh compute in double, fcpw in float32): the checks of expect_matches_brute_force
 //    (test_support.hpp) against brute_force on the float32-rounded mesh: |distance| within 1e-5
 //    of the diagonal (float32 coordinates carry 24 bits, ~6e-8 of the diagonal per coordinate; a
 //    method may compute in float on them), the closest triangle or a tie, its face normal.

@@ -1,0 +1,70 @@
+"""trimesh (PyPI `trimesh`): `ProximityQuery.on_surface` for the closest point and `contains`
+(ray tests) for inside and the sign, with trimesh's own ray backend or Embree's (PyPI
+`embreex`), chosen as a parameter (methods/README.md, "A Python method").
+
+The distance is what `ProximityQuery.signed_distance` computes (on_surface, then
+`ray.contains_points` for the sign) with its sign flipped to the harness's (negative inside), and
+with the closest point and triangle kept, which signed_distance throws away. Inside is
+`contains_points`: the parity of a ray's crossings, so an open or self-intersecting mesh is
+answered as trimesh answers it (what the stability suite shows).
+"""
+import importlib.util
+
+import numpy as np
+import trimesh  # here, not in build(): the import (seconds) is not the structure's build time
+from trimesh.ray import ray_triangle
+
+HAS_EMBREEX = importlib.util.find_spec("embreex") is not None
+if HAS_EMBREEX:
+    from trimesh.ray import ray_pyembree
+
+DESCRIPTION = ("trimesh: ProximityQuery.on_surface closest point, contains (ray parity) for "
+               "inside and sign, native or Embree (embreex) rays")
+REQUIRES = ["numpy", "trimesh", "rtree"]
+CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
+PARAMETERS = [
+    {"name": "ray", "type": "choice", "default": "embree", "choices": ["embree", "native"],
+     "help": "contains' ray backend: Embree through embreex (unsupported when embreex is not "
+             "installed) or trimesh's own (rtree and numpy)"},
+]
+
+
+class Method:
+    def __init__(self, ray="embree"):
+        self.ray_backend = ray
+        if ray == "embree" and not HAS_EMBREEX:
+            raise NotImplementedError("ray=embree needs the Python package embreex, not installed")
+
+    def build(self, V, F):
+        if not len(F):
+            raise NotImplementedError("trimesh cannot answer on an empty mesh")
+        self.mesh = trimesh.Trimesh(vertices=V, faces=F, process=False, validate=False)
+        if self.ray_backend == "embree":
+            self.ray = ray_pyembree.RayMeshIntersector(self.mesh)
+            self.ray._scene  # noqa: B018  built here, not by the first query
+        else:
+            self.ray = ray_triangle.RayMeshIntersector(self.mesh)
+        self.mesh.triangles_tree  # noqa: B018  the rtree on_surface searches, built here
+        tri = self.mesh.triangles
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        length = np.linalg.norm(n, axis=1)
+        # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
+        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+
+    def inside(self, P):
+        return self.ray.contains_points(P)
+
+    def distance(self, P):
+        closest, d, tri = self.mesh.nearest.on_surface(P)
+        inside = self.ray.contains_points(P)
+        return np.where(inside, -d, d), closest, self.face_normals[tri], tri
+
+    def structure_bytes(self):
+        # What this method holds as arrays; the rtree and the Embree scene are not counted
+        # (neither library reports its size): memory.peak_rss_bytes has them.
+        m = self.mesh
+        return int(m.vertices.nbytes + m.faces.nbytes + m.triangles.nbytes + self.face_normals.nbytes)
+
+    def info(self):
+        return {"ray": self.ray_backend,
+                "structure_bytes": "arrays only; rtree and ray backend not counted (not reported)"}
