@@ -19,6 +19,7 @@ PAPER_REFERENCE = {
     "citation": "Aguilera, Melero, Feito: Out-of-core real-time haptic interaction on very "
                 "large models, Computer-Aided Design 77 (2016) 98-106",
     "polygons": "25M-30M",
+    "min_polygons": 25e6,        # the scale the published rates are claimed for
     "levels": "11",
     "pis_random_hz": 2.5e3,
     "pis_haptic_hz": 32e3,
@@ -198,8 +199,9 @@ def _ratio(a, b):
     return a / b if a and b else None
 
 
-def paper_tables(rs):
-    """(main, ratios): two (header, rows, bold_row_indices) tables."""
+def paper_tables(rs, reproduced=None):
+    """(main, ratios): two (header, rows, bold_row_indices) tables. reproduced: {rate column
+    key (RATE_COLUMNS): verdict text} for a row under the published figures (reproduction.py)."""
     rows = paper_rows(rs)
     main_h = ["Model", "Polygons", "Method", "Octree levels", "Build", "Structure (memory)",
               "Structure (disk)", "PiS random", "PiS haptic", "Distance haptic"]
@@ -216,6 +218,9 @@ def paper_tables(rs):
     main.append(["Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
                  p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
                  fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
+    if reproduced:
+        main.append(["Reproduced by this run?", f"{fmt.count(p['min_polygons'])}+", "EBP-Octree",
+                     "–", "–", "–", "–"] + [reproduced.get(k, "–") for k, _, _ in RATE_COLUMNS])
 
     ratio_h = ["Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
                "Distance haptic: EBP/peer", "Build time: peer/EBP", "Memory: peer/EBP"]
