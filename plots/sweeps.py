@@ -16,6 +16,8 @@ How configurations are grouped (`series()`):
 """
 from collections import namedtuple
 
+from results_io import as_float   # the float a value spells; None for words, booleans, NaN
+
 Series = namedtuple("Series", "variant knobs points")
 # variant: tuple of (name, value) of the non-numeric parameters, () for none.
 # knobs: tuple of the numeric parameter names turned along the curve, () for a lone point.
@@ -32,23 +34,12 @@ def parse_key(params_key):
     return out
 
 
-def as_number(value):
-    """The float a parameter value spells, or None (booleans and words are not numbers)."""
-    if isinstance(value, bool):
-        return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        return None
-    return v if v == v else None
-
-
 def split_key(params_key):
     """(variant, knobs) of a params_key: its non-numeric and its numeric parameters, each as a
     tuple of (name, value) sorted by name (knob values as floats)."""
     variant, knobs = [], []
     for k, v in sorted(parse_key(params_key).items()):
-        n = as_number(v)
+        n = as_float(v)
         if n is None:
             variant.append((k, v))
         else:
@@ -77,7 +68,7 @@ def series(configs, resolved_value):
     out = []
     for (variant, names), pts in groups.items():
         for payload in anchors.get(variant, []):
-            values = tuple(as_number(resolved_value(payload, n)) for n in names)
+            values = tuple(as_float(resolved_value(payload, n)) for n in names)
             if all(v is not None for v in values):
                 pts.append((values, payload))
         out.append(Series(variant, names, sorted(pts, key=lambda p: p[0])))
