@@ -180,6 +180,7 @@ def _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles):
                            lambda p, name: p[0].get("job.params." + name))
     c, mk = method_color(method), method_marker(method)
     z = 3 if method == tables.STAR else 2
+    labelled = set()    # job ids already named in this panel
     for s in curves:
         ls, face = _curve_style(styles, method, s)
         xs = [p[1][1] for p in s.points]
@@ -190,17 +191,31 @@ def _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles):
         handles.setdefault((method_sort_key(method), s.variant, s.knobs), Line2D(
             [], [], color=c, marker=mk, linestyle=ls, markerfacecolor=face, markersize=6,
             label=label))
-        if not s.knobs:
-            continue
-        n = len(s.points)
-        for k, (values, (j, x, y)) in enumerate(s.points):
-            if n > MAX_LABELLED_POINTS and 0 < k < n - 1 and j.id not in front_ids:
+        if s.knobs:
+            _label_knob_points(ax, s, c, front_ids, labelled, odd=len(labelled) % 2)
+
+
+def _label_knob_points(ax, s, color, front_ids, labelled, odd):
+    """Knob values beside a curve's points, the knob's name on the first point that turns it.
+    The default configuration, shared by every curve of its variant, is labelled once
+    ('default'); successive curves put their labels above and below, so they do not overlap."""
+    n = len(s.points)
+    named = False
+    for k, (values, (j, x, y)) in enumerate(s.points):
+        anchor = not sweeps.split_key(j.params_key)[1]
+        if anchor:
+            if j.id in labelled:
                 continue
+            text = "default"
+        elif n > MAX_LABELLED_POINTS and 0 < k < n - 1 and j.id not in front_ids:
+            continue
+        else:
             text = sweeps.knob_text(values)
-            if k == 0:
-                text = ",".join(s.knobs) + "=" + text
-            ax.annotate(text, (x, y), textcoords="offset points", xytext=(5, 3), va="bottom",
-                        fontsize=6, color=c, zorder=6)
+            if not named:
+                text, named = ",".join(s.knobs) + "=" + text, True
+        labelled.add(j.id)
+        ax.annotate(text, (x, y), textcoords="offset points", xytext=(5, -4 if odd else 3),
+                    va="top" if odd else "bottom", fontsize=6, color=color, zorder=6)
 
 
 def _draw_frontier(ax, front, rings, xm, ym):
@@ -286,6 +301,8 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         elif xm.log:
             ax.set_xlim(min(xs) / 1.5, max(xs) * 2.5)    # room for the knob labels
             _log_ticks(ax, "x", FuncFormatter(lambda v, _: f"{v:g}"))
+            if math.log10(max(xs) / min(xs)) > 6:        # many decades: label a few of them
+                ax.xaxis.set_major_locator(LogLocator(base=10, numticks=7))
         _draw_frontier(ax, [(p[2], p[1]) for p in front],
                        [(shown_x(p[3], p[0]), p[1]) for p in front], xm, ym)
         better_x = "left" if xm.better == "lower" else "right"
