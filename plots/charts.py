@@ -661,7 +661,9 @@ CHARTS = {
         "Point-in-solid: speed against memory",
         "Throughput of `inside` queries against the structure's own bytes per triangle. Up "
         "and left is better; curves and frontier as above. A method that reports no "
-        "structure bytes is not drawn (the note under the chart counts them)."),
+        "structure bytes is not drawn (the note under the chart counts them). Accuracy is "
+        "not on this chart: an approximate configuration on its frontier is there for its "
+        "speed and size; its error is on the accuracy charts above."),
     "pareto_distance_memory": Chart(
         partial(pareto_chart, query="distance", x_metric="bytes_per_triangle"),
         "Distance: speed against memory",
