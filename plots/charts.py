@@ -6,6 +6,7 @@ frame). Adding a chart is one function and one CHARTS entry; report.py saves it 
 Only ok jobs with the needed values are drawn; non-ok jobs appear in the report's tables.
 """
 import math
+import os
 from collections import namedtuple
 from functools import partial
 
@@ -14,12 +15,14 @@ import numpy as np
 from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
 
 import fmt
+import metrics
 import stability
+import sweeps
 import tables
-from metrics import METRICS, axis_label, pareto_front
+from metrics import METRICS, axis_label
 from results_io import is_coherent, median, method_sort_key, shown_configs
 from style import (DPI, FIGSIZE_PANEL, HAPTIC_DEADLINE_NS, HAPTIC_RATE_HZ, STATUS_COLORS,
                    STATUS_LABELS, method_color, method_marker)
@@ -110,49 +113,175 @@ def _mesh_title(rs, mesh, extra=""):
 # ---------------------------------------------------------------------------------------------
 # Speed against accuracy (Pareto)
 # ---------------------------------------------------------------------------------------------
-def pareto_chart(rs, query, x_metric, y_metric="qps"):
-    """Every configuration of every method a point; each method's Pareto frontier a line.
+# Which linestyle each curve of one method takes, in turn (a method's colour and marker are its
+# own; its curves, a sweep of each knob and each variant, are told apart by the dash).
+SERIES_LINESTYLES = ["-", "--", ":", "-."]
+# On a log error axis, zero error cannot be drawn: exact points go to a grey band one decade
+# left of the smallest measured error. Inside the band the horizontal position has no meaning,
+# so methods are spread over +-EXACT_SPREAD decades to keep their markers apart.
+EXACT_SPREAD = 0.3
+MAX_LABELLED_POINTS = 6   # a longer sweep names only its ends and its frontier points
 
-    One panel per (model, query path). Zero error is clamped to a floor labelled 'exact'.
+
+def _pareto_points(rs, query, xm, ym):
+    """[(job, x, y)] drawable on the two metrics' axes, and how many ok jobs lack a value."""
+    pts, missing = [], 0
+    for j in rs.model_jobs():
+        if not (j.ok and j.query == query):
+            continue
+        x, y = xm.getter(j), ym.getter(j)
+        if y is None or (ym.log and y <= 0):
+            continue
+        if x is None or (xm.log and x <= 0 and not xm.zero_label):
+            missing += 1
+            continue
+        pts.append((j, x, y))
+    return pts, missing
+
+
+def _exact_positions(here, floor):
+    """method -> drawn x of its exact (zero-error) points, spread around the floor."""
+    exact = sorted({j.method for j, x, _ in here if x <= 0}, key=method_sort_key)
+    n = len(exact)
+    return {m: floor * 10 ** (EXACT_SPREAD * (2 * i / (n - 1) - 1) if n > 1 else 0.0)
+            for i, m in enumerate(exact)}
+
+
+def _short_value(v):
+    """A variant's value for a legend: a path by its file name."""
+    return os.path.basename(v) if "/" in v else v
+
+
+def _series_label(method, s):
+    return sweeps.series_label(method, s._replace(
+        variant=tuple((k, _short_value(v)) for k, v in s.variant)))
+
+
+def _curve_style(styles, method, s):
+    """(linestyle, marker face) of a curve, the same in every panel of a chart: a method's knobs
+    take the dashes in turn (a lone configuration has none); a variant's markers are hollow."""
+    if s.knobs:
+        dashes = styles.setdefault(method, {})
+        ls = dashes.setdefault(s.knobs, SERIES_LINESTYLES[len(dashes) % len(SERIES_LINESTYLES)])
+    else:
+        ls = "none"
+    return ls, "white" if s.variant else method_color(method)
+
+
+def _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles):
+    """One method's configurations in a panel: each sweep a curve along its knob, each lone
+    configuration a marker, knob values written beside their points. Adds the legend entries
+    it uses to `handles` {sort key: handle}."""
+    configs = {}
+    for j, x, y in here:
+        if j.method == method:
+            configs.setdefault(j.params_key, (j, shown_x(j, x), y))
+    curves = sweeps.series(list(configs.items()),
+                           lambda p, name: p[0].get("job.params." + name))
+    c, mk = method_color(method), method_marker(method)
+    z = 3 if method == tables.STAR else 2
+    labelled = set()    # job ids already named in this panel
+    for s in curves:
+        ls, face = _curve_style(styles, method, s)
+        xs = [p[1][1] for p in s.points]
+        ys = [p[1][2] for p in s.points]
+        ax.plot(xs, ys, color=c, marker=mk, markersize=6, linewidth=1.5, linestyle=ls,
+                markerfacecolor=face, zorder=z, alpha=0.9)
+        label = _series_label(method, s)
+        handles.setdefault((method_sort_key(method), s.variant, s.knobs), Line2D(
+            [], [], color=c, marker=mk, linestyle=ls, markerfacecolor=face, markersize=6,
+            label=label))
+        if s.knobs:
+            _label_knob_points(ax, s, c, front_ids, labelled, odd=len(labelled) % 2)
+
+
+def _label_knob_points(ax, s, color, front_ids, labelled, odd):
+    """Knob values beside a curve's points, the knob's name on the first point that turns it.
+    The default configuration, shared by every curve of its variant, is labelled once
+    ('default'); successive curves put their labels above and below, so they do not overlap."""
+    n = len(s.points)
+    named = False
+    for k, (values, (j, x, y)) in enumerate(s.points):
+        anchor = not sweeps.split_key(j.params_key)[1]
+        if anchor:
+            if j.id in labelled:
+                continue
+            text = "default"
+        elif n > MAX_LABELLED_POINTS and 0 < k < n - 1 and j.id not in front_ids:
+            continue
+        else:
+            text = sweeps.knob_text(values)
+            if not named:
+                text, named = ",".join(s.knobs) + "=" + text, True
+        labelled.add(j.id)
+        ax.annotate(text, (x, y), textcoords="offset points", xytext=(5, -4 if odd else 3),
+                    va="top" if odd else "bottom", fontsize=6, color=color, zorder=6)
+
+
+def _draw_frontier(ax, front, rings, xm, ym):
+    """The Pareto frontier over every point of the panel: a staircase through `front` [(x, y)]
+    bounding the region its points dominate (shaded), and a ring at each of `rings` [(x, y)],
+    where the frontier's points are drawn. Call once the axis limits are final; they are kept."""
+    if not front:
+        return
+    xl, yl = ax.get_xlim(), ax.get_ylim()
+    stairs = metrics.frontier_corners(front, xm.better, ym.better)
+    if xm.better == "higher":      # walk from the best-x end to the best-y end
+        stairs = stairs[::-1]
+    edge_x = xl[1] if xm.better == "lower" else xl[0]   # the worse end of each axis
+    edge_y = yl[0] if ym.better == "higher" else yl[1]
+    path = [(stairs[0][0], edge_y)] + stairs + [(edge_x, stairs[-1][1])]
+    ax.fill([p[0] for p in path] + [edge_x], [p[1] for p in path] + [edge_y],
+            color="#000000", alpha=0.05, zorder=0, linewidth=0)
+    ax.plot([p[0] for p in path], [p[1] for p in path], color="#333333", linewidth=2.5,
+            alpha=0.35, zorder=1, solid_joinstyle="miter")
+    ax.scatter([p[0] for p in rings], [p[1] for p in rings], s=120, facecolors="none",
+               edgecolors="black", linewidths=1.0, zorder=5)
+    ax.set_xlim(xl)
+    ax.set_ylim(yl)
+
+
+def pareto_chart(rs, query, x_metric, y_metric="qps"):
+    """Speed against accuracy (or memory), one panel per (model, query path).
+
+    Each method's sweep is a curve along its knob (plots/sweeps.py says which configurations
+    share a curve), a configuration without a knob a single marker; the Pareto frontier over
+    every point of the panel, all methods together, is the shaded staircase, its points ringed.
+    Which direction is better comes from the metrics (metrics.METRICS). On a log error axis,
+    zero error (an exact method) is drawn in a grey band left of every measured error.
     """
     xm, ym = METRICS[x_metric], METRICS[y_metric]
-    jobs = [j for j in rs.model_jobs() if j.ok and j.query == query]
-    pts = [(j, xm.getter(j), ym.getter(j)) for j in jobs]
-    no_oracle = sum(1 for _, x, y in pts if x is None and y is not None)
-    pts = [(j, x, y) for j, x, y in pts if x is not None and y is not None and y > 0]
+    pts, missing = _pareto_points(rs, query, xm, ym)
     if not pts:
         raise NoData(f"no ok `{query}` job has both {xm.label.lower()} and "
-                     f"{ym.label.lower()}" + (f" ({no_oracle} ran without an oracle)"
-                                              if no_oracle else ""))
+                     f"{ym.label.lower()}" + (f" ({missing} ok jobs lack the first)"
+                                              if missing else ""))
     panels = sorted({(j.mesh, j.kind) for j, _, _ in pts},
                     key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), _kind_key(p[1])))
     dropped = len(panels) - MAX_PANELS
     panels = sorted(panels[:MAX_PANELS],
                     key=lambda p: (rs.mesh_triangles(p[0]) or 0, _kind_key(p[1])))
-    fig, axes = _grid(len(panels))
-    floor = _log_floor([x for _, x, _ in pts]) if xm.log else None
+    legend_width = 3.4
+    fig, axes = _grid(len(panels), legend_width=legend_width)
+    has_zero = xm.log and xm.zero_label and any(x <= 0 for _, x, _ in pts)
+    floor = _log_floor([x for _, x, _ in pts]) if has_zero else None
     methods = sorted({j.method for j, _, _ in pts}, key=method_sort_key)
-    any_floor = False
+    handles, styles = {}, {}
     for ax, (mesh, kind) in zip(axes, panels):
         here = [(j, x, y) for j, x, y in pts if j.mesh == mesh and j.kind == kind]
+        exact_x = _exact_positions(here, floor) if floor else {}
+
+        def shown_x(j, x):
+            return exact_x[j.method] if floor and x <= 0 else x
+
+        # An exact point dominates the whole band (zero error is no better at one spot of it
+        # than at another), so its frontier corner is drawn at the band's left edge.
+        front = metrics.pareto_front(
+            [(x, y, floor * 10 ** -0.5 if floor and x <= 0 else x, j) for j, x, y in here],
+            xm.better, ym.better)
+        front_ids = {p[3].id for p in front}
         for method in methods:
-            mp = [(max(x, floor) if floor else x, y, j) for j, x, y in here
-                  if j.method == method]
-            if not mp:
-                continue
-            any_floor |= any(p[0] == floor for p in mp)
-            c, mk = method_color(method), method_marker(method)
-            z = 3 if method == tables.STAR else 2
-            ax.scatter([p[0] for p in mp], [p[1] for p in mp], color=c, marker=mk, s=30,
-                       alpha=0.45, zorder=z, linewidths=1)
-            front = pareto_front(mp, xm.better, ym.better)
-            ax.plot([p[0] for p in front], [p[1] for p in front], color=c, marker=mk,
-                    markersize=6, linewidth=1.6, zorder=z + 1)
-            n_cfg = len({p[2].params_key for p in mp})
-            if n_cfg > 1:   # a sweep: name each point, or only the frontier when crowded
-                for x, y, j in (mp if n_cfg <= 6 else front):
-                    ax.annotate(j.params_key or "default", (x, y), textcoords="offset points",
-                                xytext=(6, 0), va="center", fontsize=6, color=c)
+            _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles)
         ax.set_title(_mesh_title(rs, mesh, f"{kind} path"), fontsize=9)
         if xm.log:
             ax.set_xscale("log")
@@ -163,40 +292,56 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         ax.set_ylabel(axis_label(ym), fontsize=8)
         ax.tick_params(labelsize=7)
         if ym.log:
-            ys = [y for j, _, y in here]
+            ys = [y for _, _, y in here]
             ax.set_ylim(min(ys) / 1.8, max(ys) * 1.8)   # room for markers and labels
             _log_ticks(ax, "y", _si_formatter("q/s") if ym.unit == "queries/s" else None)
+        xs = [x for _, x, _ in pts if x > 0]
+        if floor:
+            _exact_axis(ax, xm, floor, max(xs) if xs else floor)
+        elif xm.log:
+            ax.set_xlim(min(xs) / 1.5, max(xs) * 2.5)    # room for the knob labels
+            _log_ticks(ax, "x", FuncFormatter(lambda v, _: f"{v:g}"))
+            if math.log10(max(xs) / min(xs)) > 6:        # many decades: label a few of them
+                ax.xaxis.set_major_locator(LogLocator(base=10, numticks=7))
+        _draw_frontier(ax, [(p[2], p[1]) for p in front],
+                       [(shown_x(p[3], p[0]), p[1]) for p in front], xm, ym)
         better_x = "left" if xm.better == "lower" else "right"
         better_y = "top" if ym.better == "higher" else "bottom"
         ax.text(0.02 if better_x == "left" else 0.98, 0.97 if better_y == "top" else 0.03,
                 "better", transform=ax.transAxes, fontsize=7, color="#888888",
                 ha=better_x, va=better_y, style="italic")
-    if floor:
-        lo = floor / 3
-        hi = max(max(x for _, x, _ in pts), floor) * 10   # room for the sweep labels
-        for ax in axes:
-            ax.set_xlim(lo, max(hi, floor * 100))
-            ax.xaxis.set_major_locator(LogLocator(base=10, numticks=8))
-            ax.xaxis.set_minor_formatter(NullFormatter())
-            ax.axvspan(lo, floor * math.sqrt(10), color="#eeeeee", zorder=0)
-            ticks = [t for t in ax.get_xticks() if floor * 5 < t <= hi * 3]
-            ax.set_xticks([floor] + ticks)
-            ax.set_xticklabels([xm.zero_label or "0"] + [f"$10^{{{round(math.log10(t))}}}$"
-                                                         for t in ticks])
-            ax.set_xlim(lo, max(hi, floor * 100))
-    handles = [_cfg_handle((m, "")) for m in methods]
-    handles.append(Line2D([], [], color="#555555", marker="o", linestyle="none", alpha=0.45,
-                          label="one configuration"))
-    handles.append(Line2D([], [], color="#555555", marker="o", linestyle="-",
-                          label="Pareto frontier"))
+    legend = [handles[k] for k in sorted(handles)]
+    legend.append(Line2D([], [], color="#333333", linewidth=2.5, alpha=0.35,
+                         label="Pareto frontier\n(all methods; shaded: dominated)"))
+    legend.append(Line2D([], [], color="black", marker="o", markersize=9, linestyle="none",
+                         markerfacecolor="none", label="on the frontier"))
     note = []
-    if any_floor:
-        note.append(f"'{xm.zero_label}' (grey band): no error measured, drawn at {floor:.0e}.")
-    if no_oracle:
-        note.append(f"{no_oracle} ok jobs without an oracle are not drawn.")
+    if floor:
+        note.append(f"'{xm.zero_label}' (grey band): zero error, which a log axis cannot show; "
+                    "inside the band the horizontal position only sets methods apart.")
+    if missing:
+        note.append(f"{missing} ok jobs without a value for the x axis are not drawn.")
     if dropped > 0:
         note.append(f"{dropped} smaller model/path panels omitted.")
-    return _finish(fig, handles, "method", " ".join(note))
+    return _finish(fig, legend, "method · swept parameter", " ".join(note),
+                   legend_width=legend_width)
+
+
+def _exact_axis(ax, xm, floor, x_max):
+    """A log error axis with a labelled grey band at `floor` standing for zero error."""
+    lo, band_hi = floor * 10 ** -0.5, floor * 10 ** 0.5
+    hi = max(x_max, floor * 10) * 10     # room for the knob labels
+    ax.set_xlim(lo, hi)
+    ax.axvspan(lo, band_hi, color="#e6e6e6", zorder=0)
+    ticks = [10.0 ** e for e in range(round(math.log10(floor)) + 1,
+                                      math.floor(math.log10(hi)) + 1)]
+    step = max(1, math.ceil(len(ticks) / 6))          # at most about six decade labels
+    ticks = ticks[::-1][::step][::-1]
+    ax.set_xticks([floor] + ticks)
+    ax.set_xticklabels([xm.zero_label or "0"] +
+                       [f"$10^{{{round(math.log10(t))}}}$" for t in ticks])
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.set_xlim(lo, hi)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -493,9 +638,13 @@ CHARTS = {
     "pareto_inside_wrong_rate": Chart(
         partial(pareto_chart, query="inside", x_metric="inside_wrong_rate"),
         "Point-in-solid: speed against wrong answers",
-        "Throughput against the share of wrong `inside` answers. Up and left is better. Every "
-        "configuration of a sweep is a faint point; the line joins each method's Pareto "
-        "frontier (the configurations no other of its configurations beats on both axes)."),
+        "Throughput against the share of wrong `inside` answers, one panel per model and query "
+        "path. Up and left is better. Each method's parameter sweep is a curve along its knob "
+        "(the knob's values beside the points; a method's curves are told apart by their "
+        "dashes); a configuration without a knob is one marker. The shaded staircase is the "
+        "Pareto frontier over every point of the panel, all methods together: the ringed "
+        "points are those no other configuration beats on both axes. Exact answers (no wrong "
+        "answer) are drawn in the grey band marked 'exact'."),
     "pareto_inside_wrong_rate_far": Chart(
         partial(pareto_chart, query="inside", x_metric="inside_wrong_rate_far"),
         "Point-in-solid: speed against wrong answers far from the surface",
@@ -505,7 +654,21 @@ CHARTS = {
         partial(pareto_chart, query="distance", x_metric="dist_rel_err_p99"),
         "Distance: speed against error",
         "Throughput against the 99th percentile of the signed-distance error, as a fraction "
-        "of the mesh diagonal. Up and left is better."),
+        "of the mesh diagonal. Up and left is better; curves, frontier and the 'exact' band "
+        "as in the point-in-solid chart."),
+    "pareto_inside_memory": Chart(
+        partial(pareto_chart, query="inside", x_metric="bytes_per_triangle"),
+        "Point-in-solid: speed against memory",
+        "Throughput of `inside` queries against the structure's own bytes per triangle. Up "
+        "and left is better; curves and frontier as above. A method that reports no "
+        "structure bytes is not drawn (the note under the chart counts them). Accuracy is "
+        "not on this chart: an approximate configuration on its frontier is there for its "
+        "speed and size; its error is on the accuracy charts above."),
+    "pareto_distance_memory": Chart(
+        partial(pareto_chart, query="distance", x_metric="bytes_per_triangle"),
+        "Distance: speed against memory",
+        "Throughput of `distance` queries against the structure's own bytes per triangle, as "
+        "above."),
     "throughput_vs_size": Chart(
         throughput_vs_size, "Throughput against model size",
         "Median queries per second of each method (one configuration per method, named in the "

@@ -69,17 +69,35 @@ def axis_label(metric):
 
 
 def pareto_front(points, x_better, y_better):
-    """Non-dominated subset of (x, y, payload) points, sorted by x ascending.
+    """Non-dominated subset of (x, y, payload...) points, sorted by x ascending.
 
-    A point is dominated when another is at least as good on both axes and better on one.
+    A point is dominated when another is at least as good on both axes and better on one, so
+    points that tie on both axes are all kept (neither beats the other), and of two points with
+    the same x only the better y stays. Exact answers are x = 0 on an error axis, and compete
+    as any value: the fastest exact configuration is on the frontier.
     """
     sx = 1 if x_better == "higher" else -1
     sy = 1 if y_better == "higher" else -1
-    # Best x first; keep a point when its y beats every y seen so far.
+    # Best x first (best y first among equal x); keep a point when its y beats every y seen so
+    # far, or when it ties on both axes with the last point kept.
     ordered = sorted(points, key=lambda p: (-sx * p[0], -sy * p[1]))
-    front, best_y = [], None
+    front = []
     for p in ordered:
-        if best_y is None or sy * p[1] > sy * best_y:
+        if not front or sy * p[1] > sy * front[-1][1] or tuple(p[:2]) == tuple(front[-1][:2]):
             front.append(p)
-            best_y = p[1]
     return sorted(front, key=lambda p: p[0])
+
+
+def frontier_corners(front, x_better, y_better):
+    """The staircase through frontier points (as pareto_front returns them, x ascending): the
+    boundary of the region they dominate, [(x, y)] from one end to the other. Between two
+    frontier points the corner takes the worse x and the worse y of the pair."""
+    worse_x = max if x_better == "lower" else min
+    worse_y = min if y_better == "higher" else max
+    out = []
+    for a, b in zip(front, front[1:]):
+        out.append((a[0], a[1]))
+        out.append((worse_x(a[0], b[0]), worse_y(a[1], b[1])))
+    if front:
+        out.append((front[-1][0], front[-1][1]))
+    return out

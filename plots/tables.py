@@ -19,6 +19,7 @@ PAPER_REFERENCE = {
     "citation": "Aguilera, Melero, Feito: Out-of-core real-time haptic interaction on very "
                 "large models, Computer-Aided Design 77 (2016) 98-106",
     "polygons": "25M-30M",
+    "min_polygons": 25e6,        # the scale the published rates are claimed for
     "levels": "11",
     "pis_random_hz": 2.5e3,
     "pis_haptic_hz": 32e3,
@@ -207,10 +208,11 @@ def _ratio(a, b):
     return a / b if a and b else None
 
 
-def paper_tables(rs):
+def paper_tables(rs, reproduced=None):
     """(main, ratios): two (header, rows, bold_row_indices) tables. When the jobs ran on several
     hosts, both begin with a "Host" column and a ratio pairs the EBP-Octree and a peer of one
-    host only (ratios are never taken across machines)."""
+    host only (ratios are never taken across machines). reproduced: {rate column key
+    (RATE_COLUMNS): verdict text} for a row under the published figures (reproduction.py)."""
     rows = paper_rows(rs)
     by_host = len({r["host"] for r in rows}) > 1
     host_cell = (lambda r: [r["host"] or "?"]) if by_host else (lambda r: [])
@@ -231,6 +233,10 @@ def paper_tables(rs):
         "Paper (2016, 2015 hardware)", p["polygons"], "EBP-Octree (published)",
         p["levels"], "–", "–", "–", fmt.hz(p["pis_random_hz"]),
         fmt.hz(p["pis_haptic_hz"]), "≈" + fmt.hz(p["dist_haptic_hz"])])
+    if reproduced:
+        main.append((["–"] if by_host else []) + [
+            "Reproduced by this run?", f"{fmt.count(p['min_polygons'])}+", "EBP-Octree",
+            "–", "–", "–", "–"] + [reproduced.get(k, "–") for k, _, _ in RATE_COLUMNS])
 
     ratio_h = (["Host"] if by_host else []) + [
         "Model", "Polygons", "Peer", "PiS random: EBP/peer", "PiS haptic: EBP/peer",
