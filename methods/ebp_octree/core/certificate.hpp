@@ -1,0 +1,172 @@
+#pragma once
+/// The distance certificate of a coherent path (DESIGN.md, "Haptic distance by certificate"). A
+/// renewal at p runs the branch and bound with its prune relaxed (Query::distance_bound with a
+/// collector) and keeps S, every triangle within best + 2r of p, as copies of their float
+/// geometry, input index and where they were found. For any q with |q - p| <= r the closest
+/// triangle of the whole mesh is in S (the proof is in certificate.cpp), so the query at q is a
+/// scan of S: a SIMD lower bound per triangle (certificate_scan.hpp) that only prunes, and the
+/// exact closest point in double, with the same (squared distance, input index) tie rule as the
+/// branch and bound, for the rest. Answers are therefore the branch and bound's, bit for bit.
+///
+/// The radius rule: r = min(kStepFactor x step, max(kFloorFactor x step, (d_(K+1) - best) / 2)),
+/// K = kNearest, step = the mean of the path's last kStepWindow steps, d_(K+1) the (K+1)-th
+/// smallest triangle distance at p. The step cap keeps S small where triangles are large, the
+/// K-nearest term where they are small, and the floor keeps r > 0 where K+1 triangles tie at a
+/// vertex (DESIGN.md gives the measurements behind the constants).
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "methods/ebp_octree/core/certificate_scan.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+
+namespace ebp {
+
+inline constexpr unsigned kNearest = 32;
+inline constexpr double kStepFactor = 16.0;
+inline constexpr double kFloorFactor = 0.5;
+inline constexpr unsigned kStepWindow = 8;
+
+/// Where a triangle reference was found: the out-of-core page (UINT32_MAX in memory), its
+/// LeafTri index, leaf and leaf node in that tree (the seed of the next branch and bound).
+struct TriangleSite {
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX, node = UINT32_MAX;
+};
+
+/// A bound on the rounding error of a computed point-triangle distance near p, in a tree whose
+/// root cube is (root_lo, root_size): 4x the branch and bound's own `tol`.
+double certificate_tol(const Vec3d& p, const Vec3d& root_lo, double root_size);
+
+/// One answer of the certificate: the winner's squared distance, closest point, input index, site.
+struct CertifiedHit {
+  double d2 = 0;
+  Vec3d closest, normal;
+  std::uint64_t key = UINT64_MAX;
+  TriangleSite site;
+};
+
+class DistanceCertificate {
+ public:
+  DistanceCertificate();
+  /// Forces a kernel (tests: the scalar one on an AVX2 machine). Must be supported by the CPU.
+  void set_kernel(ScanKernel k) { kernel_ = k; }
+  ScanKernel kernel() const { return kernel_; }
+
+  // --- renewal ---
+  /// Starts collecting at p with the rule's radii (r_max >= r_floor >= 0) and rounding bound tol.
+  void begin(const Vec3d& p, double r_max, double r_floor, double tol);
+  /// A triangle the relaxed branch and bound tested exactly (squared distance d2 to p, tie key,
+  /// float geometry, site); returns the prune radius from now on (it never grows): every
+  /// triangle within it must still be offered.
+  /// `closest` is the exact closest point the branch and bound computed (kept for the winner).
+  double offer(double d2, const Vec3d& closest, std::uint64_t key, const LeafTri& t, const TriangleSite& site);
+  /// The prune radius (infinite before the first offer).
+  double radius() const { return prune_; }
+  /// Ends the renewal: the winner (the lexicographic minimum of what was offered, which is the
+  /// mesh's when nothing within the prune radius was left out), r, S packed for the scan.
+  /// Returns false if nothing was offered (no certificate then).
+  bool finish(CertifiedHit* winner);
+
+  // --- serving ---
+  bool valid() const { return valid_; }
+  /// |q - centre| <= r: q's closest triangle is in S.
+  bool covers(const Vec3d& q) const;
+  /// The lexicographic minimum of (squared distance, key) over S at q (q covered).
+  CertifiedHit serve(const Vec3d& q, QueryCounters& c);
+  void clear() { valid_ = false; }
+  std::uint32_t size() const { return std::uint32_t(members_.size()); }
+  double r() const { return r_; }
+
+ private:
+  struct Member {
+    float a[3], b[3], c[3];
+    std::uint64_t key;
+    TriangleSite site;
+    double d;  ///< distance at the centre (collection only)
+  };
+  static bool better(double d2, std::uint64_t key, double d2b, std::uint64_t keyb) {
+    return d2 < d2b || (d2 == d2b && key < keyb);
+  }
+  void update_prune();
+  void pack(double r);
+  void exact(std::uint32_t i, const Vec3d& q, CertifiedHit* hit, QueryCounters& c) const;
+
+  ScanKernel kernel_;
+  bool valid_ = false;
+  Vec3d centre_;
+  double r_ = 0, r2_ = 0, r_max_ = 0, r_floor_ = 0, tol_ = 0;
+  double prune_ = 0, best_ = 0;
+  CertifiedHit win_;          ///< the collection's lexicographic minimum so far
+  std::uint32_t win_index_ = 0;
+  std::vector<double> heap_;  ///< max-heap of the kNearest + 1 smallest distances offered
+  std::vector<Member> members_;
+  std::vector<float> pack_;  ///< blocks x kScanRows x kScanLanes
+  std::vector<std::uint8_t> masks_;
+  std::uint32_t current_ = 0;  ///< S's last winner: tested first, its distance the running best
+};
+
+/// The path state a coherent distance needs besides the tree's: the mean step of the probe and
+/// the certificate, and the previous query's sign and distance (the chained sign).
+class CertifiedPath {
+ public:
+  /// A new path: forget the steps, the certificate and the sign.
+  void reset();
+  /// Records q as the path's next point (before answering it).
+  void step_to(const Vec3d& q);
+  /// r_max, r_floor for a renewal at the current point; false while no step is known.
+  bool radii(double* r_max, double* r_floor) const;
+  /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
+  /// bound tol): that open ball holds no surface point, so the winding number is constant in
+  /// it. Only on closed meshes (elsewhere the sign is not a function of the winding number).
+  bool sign_chained(const Vec3d& q, double tol, bool* inside) const;
+  /// The point of the last answered() (meaningful once sign_chained has returned true).
+  const Vec3d& sign_point() const { return sign_p_; }
+  /// Records q's answer (unsigned distance, sign) for the next sign_chained.
+  void answered(const Vec3d& q, double distance, bool inside);
+
+  DistanceCertificate cert;
+
+ private:
+  bool have_prev_ = false;
+  Vec3d prev_;
+  double steps_[kStepWindow] = {};
+  unsigned nsteps_ = 0, next_ = 0;
+  bool sign_ok_ = false, sign_in_ = false;
+  Vec3d sign_p_;
+  double sign_best_ = 0;
+};
+
+/// One coherent unsigned distance query on the certificate path, in memory or out of core: a
+/// scan of S when it covers p; else, once the path has a step, a renewal at p: begin(), then
+/// `renew(cert)` runs the tree's branch and bound with `cert` as its collector, then finish();
+/// else (the path's first point) `plain()`, the branch and bound alone. On a certified answer
+/// *site is where its triangle was found (the next renewal's seed). tol: certificate_tol at p.
+template <class Renew, class Plain>
+DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double tol, QueryCounters& c, TriangleSite* site,
+                               Renew&& renew, Plain&& plain) {
+  path.step_to(p);
+  CertifiedHit h;
+  double r_max, r_floor;
+  if (path.cert.covers(p)) {
+    ++c.certificate_served;
+    h = path.cert.serve(p, c);
+  } else if (path.radii(&r_max, &r_floor)) {
+    path.cert.begin(p, r_max, r_floor, tol);
+    renew(path.cert);
+    ++c.certificate_renewals;
+    if (!path.cert.finish(&h)) return DistanceAnswer{};  // cannot happen: the mesh has a triangle
+  } else {
+    path.cert.clear();
+    return plain();
+  }
+  *site = h.site;
+  DistanceAnswer r;
+  r.distance = std::sqrt(h.d2);
+  r.closest = h.closest;
+  r.normal = h.normal;
+  r.triangle = std::int64_t(h.key);
+  return r;
+}
+
+}  // namespace ebp
