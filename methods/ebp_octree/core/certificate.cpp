@@ -34,12 +34,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 inline double max_abs(const Vec3d& v) { return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}); }
 
-/// The smallest float >= x (x finite and non-negative, or +inf).
-inline float float_up(double x) {
-  float f = float(x);
-  if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-  return f;
-}
+/// A float >= x (x >= 0): rounding to float loses less than 1e-6 of x.
+inline float float_up(double x) { return float(x * (1 + 1e-6)); }
 
 inline Vec3d rounded(const Vec3d& v) { return {double(float(v.x)), double(float(v.y)), double(float(v.z))}; }
 }  // namespace
@@ -66,7 +62,7 @@ void DistanceCertificate::begin(const Vec3d& p, double r_max, double r_floor, do
 void DistanceCertificate::update_prune() {
   // best + min(2 r_max, max(d_(K+1) - best, 2 r_floor)): non-increasing as best and d_(K+1)
   // decrease, so everything within the final radius was offered (finish() relies on it).
-  const double dk = heap_.size() == kNearest + 1 ? heap_.front() : kInf;
+  const double dk = heap_.size() == rule_.nearest + 1 ? heap_.front() : kInf;
   const double extra = std::min(2 * r_max_, std::max(dk - best_, 2 * r_floor_));
   prune_ = std::min(prune_, best_ + extra + 6 * tol_);
 }
@@ -90,7 +86,7 @@ double DistanceCertificate::offer(double d2, const Vec3d& closest, std::uint64_t
     win_.site = site;
     win_index_ = std::uint32_t(members_.size() - 1);
   }
-  if (heap_.size() < kNearest + 1) {
+  if (heap_.size() < rule_.nearest + 1) {
     heap_.push_back(d);
     std::push_heap(heap_.begin(), heap_.end());
   } else if (d < heap_.front()) {
@@ -106,7 +102,7 @@ double DistanceCertificate::offer(double d2, const Vec3d& closest, std::uint64_t
 bool DistanceCertificate::finish(CertifiedHit* winner) {
   if (members_.empty()) return false;
   const double best = std::sqrt(win_.d2);
-  const double dk = heap_.size() == kNearest + 1 ? heap_.front() : kInf;
+  const double dk = heap_.size() == rule_.nearest + 1 ? heap_.front() : kInf;
   double r = std::max(r_floor_, 0.5 * (dk - best - 6 * tol_));
   r = std::max(0.0, std::min(r_max_, r));
   const double keep = best + 2 * r + 5 * tol_;  // <= the prune radius (certificate.hpp)
@@ -121,10 +117,35 @@ bool DistanceCertificate::finish(CertifiedHit* winner) {
   r2_ = r * r;
   pack(r);
   valid_ = true;
-  const Member& w = members_[0];
-  win_.normal = bvhbench::triangle_normal(to_d(w.a), to_d(w.b), to_d(w.c));
+  win_.normal = members_[0].normal;
   *winner = win_;
   return true;
+}
+
+const DistanceCertificate::Directions& DistanceCertificate::directions(const Member& m) {
+  Directions& e = directions_[m.key % kDirectionSlots];
+  if (e.key == m.key) return e;
+  e.key = m.key;
+  const Vec3d a = to_d(m.a), b = to_d(m.b), c = to_d(m.c);
+  e.normal = bvhbench::triangle_normal(a, b, c);  // the answer's, exactly as the search computes it
+  e.plane = false;
+  const Vec3d nd = cross(b - a, c - a);
+  const double len = norm(nd);
+  if (!(len > 0) || !std::isfinite(len)) return e;  // no plane: bound 0, always tested exactly
+  e.plane = true;
+  const Vec3d nrm = nd / len;
+  const Vec3d nf = rounded(nrm);
+  e.n[0] = float(nf.x), e.n[1] = float(nf.y), e.n[2] = float(nf.z);
+  const Vec3d V[3] = {a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d& v0 = V[k];
+    const Vec3d md = cross(V[(k + 1) % 3] - v0, nrm);
+    const double ml = norm(md);
+    Vec3d mf{0, 0, 0};
+    if (ml > 0 && std::isfinite(ml)) mf = rounded(dot(md, V[(k + 2) % 3] - v0) > 0 ? md / (-ml) : md / ml);
+    e.m[k][0] = float(mf.x), e.m[k][1] = float(mf.y), e.m[k][2] = float(mf.z);
+  }
+  return e;
 }
 
 void DistanceCertificate::pack(double r) {
@@ -139,15 +160,15 @@ void DistanceCertificate::pack(double r) {
       put(17, -kInf);
       continue;
     }
-    const Member& m = members_[i];
+    Member& m = members_[i];
+    const Directions& dir = directions(m);
+    m.normal = dir.normal;
+    if (!dir.plane) continue;  // all zero: bound 0, always tested exactly
+    // The offsets and the deviations of the rounded planes, relative to the centre.
     const Vec3d V[3] = {to_d(m.a) - centre_, to_d(m.b) - centre_, to_d(m.c) - centre_};
     double vmax = 0;
     for (const Vec3d& v : V) vmax = std::max(vmax, max_abs(v));
-    const Vec3d nd = cross(V[1] - V[0], V[2] - V[0]);
-    const double len = norm(nd);
-    if (!(len > 0) || !std::isfinite(len)) continue;  // no plane: bound 0, always tested exactly
-    const Vec3d nrm = nd / len;
-    const Vec3d nf = rounded(nrm);
+    const Vec3d nf = to_d(dir.n);
     const double d = double(float(dot(nf, V[0])));
     double eh = 0;
     for (const Vec3d& v : V) eh = std::max(eh, std::fabs(dot(nf, v) - d));
@@ -157,17 +178,8 @@ void DistanceCertificate::pack(double r) {
     put(3, d);
     double so = 0, fmax = 0;
     for (int e = 0; e < 3; ++e) {
-      const Vec3d& v0 = V[e];
-      const Vec3d& v1 = V[(e + 1) % 3];
-      const Vec3d& opp = V[(e + 2) % 3];
-      const Vec3d md = cross(v1 - v0, nrm);
-      const double ml = norm(md);
-      Vec3d mf{0, 0, 0};
-      double f = 0;
-      if (ml > 0 && std::isfinite(ml)) {
-        mf = rounded(dot(md, opp - v0) > 0 ? md / (-ml) : md / ml);
-        f = double(float(dot(mf, v0)));
-      }
+      const Vec3d mf = to_d(dir.m[e]);
+      const double f = double(float(dot(mf, V[e])));
       double eo = 0;
       for (const Vec3d& v : V) eo = std::max(eo, dot(mf, v) - f);
       so = std::max(so, eo);
@@ -221,13 +233,19 @@ CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
       }
   }
   current_ = win;
-  const Member& w = members_[win];
-  h.normal = bvhbench::triangle_normal(to_d(w.a), to_d(w.b), to_d(w.c));
+  h.normal = members_[win].normal;
   return h;
+}
+
+Vec3d CertifiedPath::ahead(const Vec3d& q) const {
+  const Vec3d c = q + dir_ * (cert.rule().ahead * last_r_);
+  return std::isfinite(c.x + c.y + c.z) ? c : q;
 }
 
 void CertifiedPath::reset() {
   have_prev_ = false;
+  dir_ = Vec3d(0, 0, 0);
+  last_r_ = 0;
   nsteps_ = next_ = 0;
   sign_ok_ = false;
   cert.clear();
@@ -236,6 +254,7 @@ void CertifiedPath::reset() {
 void CertifiedPath::step_to(const Vec3d& q) {
   if (have_prev_) {
     steps_[next_] = norm(q - prev_);
+    dir_ = steps_[next_] > 0 ? (q - prev_) / steps_[next_] : Vec3d(0, 0, 0);
     next_ = (next_ + 1) % kStepWindow;
     nsteps_ = std::min(nsteps_ + 1, kStepWindow);
   }
@@ -249,8 +268,8 @@ bool CertifiedPath::radii(double* r_max, double* r_floor) const {
   for (unsigned i = 0; i < nsteps_; ++i) s += steps_[i];
   const double step = s / double(nsteps_);
   if (!std::isfinite(step)) return false;
-  *r_max = kStepFactor * step;
-  *r_floor = kFloorFactor * step;
+  *r_max = cert.rule().step_factor * step;
+  *r_floor = cert.rule().floor_factor * step;
   return true;
 }
 

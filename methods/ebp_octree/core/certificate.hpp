@@ -27,6 +27,13 @@ inline constexpr unsigned kNearest = 32;
 inline constexpr double kStepFactor = 16.0;
 inline constexpr double kFloorFactor = 0.5;
 inline constexpr unsigned kStepWindow = 8;
+inline constexpr double kAheadFactor = 0.8;
+
+/// The rule's constants (a struct so that a measurement can vary them in one place).
+struct CertificateRule {
+  unsigned nearest = kNearest;
+  double step_factor = kStepFactor, floor_factor = kFloorFactor, ahead = kAheadFactor;
+};
 
 /// Where a triangle reference was found: the out-of-core page (UINT32_MAX in memory), its
 /// LeafTri index, leaf and leaf node in that tree (the seed of the next branch and bound).
@@ -52,6 +59,7 @@ class DistanceCertificate {
   /// Forces a kernel (tests: the scalar one on an AVX2 machine). Must be supported by the CPU.
   void set_kernel(ScanKernel k) { kernel_ = k; }
   ScanKernel kernel() const { return kernel_; }
+  const CertificateRule& rule() const { return rule_; }
 
   // --- renewal ---
   /// Starts collecting at p with the rule's radii (r_max >= r_floor >= 0) and rounding bound tol.
@@ -84,15 +92,28 @@ class DistanceCertificate {
     std::uint64_t key;
     TriangleSite site;
     double d;  ///< distance at the centre (collection only)
+    Vec3d normal;  ///< the face normal an answer gives (computed once, at renewal)
   };
   static bool better(double d2, std::uint64_t key, double d2b, std::uint64_t keyb) {
     return d2 < d2b || (d2 == d2b && key < keyb);
   }
+  /// The directions of a triangle's bound (float face normal, outward edge normals) and its
+  /// answer's normal: functions of its geometry alone, so kept from renewal to renewal (the
+  /// next certificate shares most of S) in a small direct-mapped table by input index.
+  struct Directions {
+    std::uint64_t key = UINT64_MAX;
+    bool plane = false;  ///< false: no usable plane (zero area), the bound is 0
+    float n[3], m[3][3];
+    Vec3d normal;
+  };
+  static constexpr std::size_t kDirectionSlots = 256;
+  const Directions& directions(const Member& m);
   void update_prune();
   void pack(double r);
   void exact(std::uint32_t i, const Vec3d& q, CertifiedHit* hit, QueryCounters& c) const;
 
   ScanKernel kernel_;
+  CertificateRule rule_;
   bool valid_ = false;
   Vec3d centre_;
   double r_ = 0, r2_ = 0, r_max_ = 0, r_floor_ = 0, tol_ = 0;
@@ -101,6 +122,7 @@ class DistanceCertificate {
   std::uint32_t win_index_ = 0;
   std::vector<double> heap_;  ///< max-heap of the kNearest + 1 smallest distances offered
   std::vector<Member> members_;
+  std::vector<Directions> directions_ = std::vector<Directions>(kDirectionSlots);
   std::vector<float> pack_;  ///< blocks x kScanRows x kScanLanes
   std::vector<std::uint8_t> masks_;
   std::uint32_t current_ = 0;  ///< S's last winner: tested first, its distance the running best
@@ -114,6 +136,12 @@ class CertifiedPath {
   void reset();
   /// Records q as the path's next point (before answering it).
   void step_to(const Vec3d& q);
+  /// Where the next certificate is centred for a renewal at q (the current point): ahead of q
+  /// along the last step, by kAheadFactor x the last certificate's radius, so that the probe
+  /// crosses the ball instead of starting at its centre (fewer renewals on a straight slide).
+  Vec3d ahead(const Vec3d& q) const;
+  /// Records the renewal just finished (its radius sets the next offset).
+  void renewed() { last_r_ = cert.r(); }
   /// r_max, r_floor for a renewal at the current point; false while no step is known.
   bool radii(double* r_max, double* r_floor) const;
   /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
@@ -129,7 +157,8 @@ class CertifiedPath {
 
  private:
   bool have_prev_ = false;
-  Vec3d prev_;
+  Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
+  double last_r_ = 0;
   double steps_[kStepWindow] = {};
   unsigned nsteps_ = 0, next_ = 0;
   bool sign_ok_ = false, sign_in_ = false;
@@ -138,13 +167,15 @@ class CertifiedPath {
 };
 
 /// One coherent unsigned distance query on the certificate path, in memory or out of core: a
-/// scan of S when it covers p; else, once the path has a step, a renewal at p: begin(), then
-/// `renew(cert)` runs the tree's branch and bound with `cert` as its collector, then finish();
-/// else (the path's first point) `plain()`, the branch and bound alone. On a certified answer
-/// *site is where its triangle was found (the next renewal's seed). tol: certificate_tol at p.
+/// scan of S when it covers p; else, once the path has a step, a renewal at the centre
+/// path.ahead(p): begin(), then `renew(cert, centre)` runs the tree's branch and bound at the
+/// centre with `cert` as its collector, then finish(), and p is served from the new certificate
+/// (or, if its ball turned out too small to hold p, answered by `plain()`); else (the path's
+/// first point) `plain()`, the branch and bound alone. On a certified answer *site is where its
+/// triangle was found (the next renewal's seed). The tree's root cube: root_lo, root_size.
 template <class Renew, class Plain>
-DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double tol, QueryCounters& c, TriangleSite* site,
-                               Renew&& renew, Plain&& plain) {
+DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d& root_lo, double root_size,
+                               QueryCounters& c, TriangleSite* site, Renew&& renew, Plain&& plain) {
   path.step_to(p);
   CertifiedHit h;
   double r_max, r_floor;
@@ -152,10 +183,16 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double tol, 
     ++c.certificate_served;
     h = path.cert.serve(p, c);
   } else if (path.radii(&r_max, &r_floor)) {
-    path.cert.begin(p, r_max, r_floor, tol);
-    renew(path.cert);
+    const Vec3d centre = path.ahead(p);
+    path.cert.begin(centre, r_max, r_floor, certificate_tol(centre, root_lo, root_size));
+    renew(path.cert, centre);
     ++c.certificate_renewals;
     if (!path.cert.finish(&h)) return DistanceAnswer{};  // cannot happen: the mesh has a triangle
+    path.renewed();
+    if (!(centre == p)) {
+      if (!path.cert.covers(p)) return plain();
+      h = path.cert.serve(p, c);
+    }
   } else {
     path.cert.clear();
     return plain();

@@ -438,15 +438,15 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
 DistanceAnswer Query::certified_distance(const Vec3d& p) {
   TriangleSite site;
   const DistanceAnswer r = certified_query(
-      *path_, p, certificate_tol(p, t_.root_lo, t_.root_size), counters, &site,
-      [&](DistanceCertificate& cert) {
+      *path_, p, t_.root_lo, t_.root_size, counters, &site,
+      [&](DistanceCertificate& cert, const Vec3d& centre) {
         DistanceBest b;
         b.collect = &cert;
         DistanceStart s;
         s.seed_tri = last_tri_;
         s.seed_leaf = last_leaf_;
         s.seed_node = last_leaf_node_;
-        distance_bound(p, b, s);
+        distance_bound(centre, b, s);
       },
       [&] { return searched_distance(p); });
   if (site.k != UINT32_MAX) {

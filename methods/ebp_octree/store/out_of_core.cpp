@@ -230,11 +230,11 @@ DistanceAnswer OutOfCore::searched_distance(const Vec3d& p) {
 DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
   TriangleSite site;
   const DistanceAnswer r = certified_query(
-      *path_, p, certificate_tol(p, root_lo_, root_size_), top_counters_, &site,
-      [&](DistanceCertificate& cert) {
+      *path_, p, root_lo_, root_size_, top_counters_, &site,
+      [&](DistanceCertificate& cert, const Vec3d& centre) {
         Best bst;
         bst.b.collect = &cert;
-        search(p, bst);
+        search(centre, bst);
       },
       [&] { return searched_distance(p); });
   if (site.page != UINT32_MAX) {
