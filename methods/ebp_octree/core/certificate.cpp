@@ -269,7 +269,11 @@ bool CertifiedPath::radii(double* r_max, double* r_floor) const {
   const double step = s / double(nsteps_);
   if (!std::isfinite(step)) return false;
   *r_max = cert.rule().step_factor * step;
-  *r_floor = cert.rule().floor_factor * step;
+  // Where the K-nearest term set the last radius (small triangles), start the collection from
+  // a multiple of it: the relaxed search then tests the triangles near p, not the whole cap of
+  // 16 steps, before it has K + 1 of them (the radius grows back by this factor per renewal).
+  if (last_r_ > 0) *r_max = std::min(*r_max, cert.rule().growth * last_r_);
+  *r_floor = std::min(cert.rule().floor_factor * step, *r_max);
   return true;
 }
 

@@ -8,7 +8,8 @@
 /// exact closest point in double, with the same (squared distance, input index) tie rule as the
 /// branch and bound, for the rest. Answers are therefore the branch and bound's, bit for bit.
 ///
-/// The radius rule: r = min(kStepFactor x step, max(kFloorFactor x step, (d_(K+1) - best) / 2)),
+/// The radius rule: r = min(r_max, max(kFloorFactor x step, (d_(K+1) - best) / 2)), r_max =
+/// min(kStepFactor x step, kGrowth x the last certificate's r),
 /// K = kNearest, step = the mean of the path's last kStepWindow steps, d_(K+1) the (K+1)-th
 /// smallest triangle distance at p. The step cap keeps S small where triangles are large, the
 /// K-nearest term where they are small, and the floor keeps r > 0 where K+1 triangles tie at a
@@ -28,11 +29,12 @@ inline constexpr double kStepFactor = 16.0;
 inline constexpr double kFloorFactor = 0.5;
 inline constexpr unsigned kStepWindow = 8;
 inline constexpr double kAheadFactor = 0.8;
+inline constexpr double kGrowth = 2.0;
 
 /// The rule's constants (a struct so that a measurement can vary them in one place).
 struct CertificateRule {
   unsigned nearest = kNearest;
-  double step_factor = kStepFactor, floor_factor = kFloorFactor, ahead = kAheadFactor;
+  double step_factor = kStepFactor, floor_factor = kFloorFactor, ahead = kAheadFactor, growth = kGrowth;
 };
 
 /// Where a triangle reference was found: the out-of-core page (UINT32_MAX in memory), its
