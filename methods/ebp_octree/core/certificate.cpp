@@ -246,6 +246,7 @@ void CertifiedPath::reset() {
   have_prev_ = false;
   dir_ = Vec3d(0, 0, 0);
   last_r_ = 0;
+  served_ = backoff_ = 0;
   nsteps_ = next_ = 0;
   sign_ok_ = false;
   cert.clear();

@@ -30,6 +30,7 @@ inline constexpr double kFloorFactor = 0.5;
 inline constexpr unsigned kStepWindow = 8;
 inline constexpr double kAheadFactor = 0.8;
 inline constexpr double kGrowth = 2.0;
+inline constexpr unsigned kBackOff = 8;
 
 /// The rule's constants (a struct so that a measurement can vary them in one place).
 struct CertificateRule {
@@ -143,7 +144,19 @@ class CertifiedPath {
   /// crosses the ball instead of starting at its centre (fewer renewals on a straight slide).
   Vec3d ahead(const Vec3d& q) const;
   /// Records the renewal just finished (its radius sets the next offset).
-  void renewed() { last_r_ = cert.r(); }
+  void renewed() {
+    last_r_ = cert.r();
+    served_ = 0;
+  }
+  void served() { ++served_; }
+  /// A probe that leaves each ball at once (a jittery walk, not a slide) makes every renewal a
+  /// loss: when a certificate served no query, the next kBackOff queries are plain searches.
+  bool backing_off() {
+    if (served_ == 0 && cert.valid() && backoff_ == 0) backoff_ = kBackOff;
+    if (backoff_ == 0) return false;
+    if (--backoff_ == 0) cert.clear();  // then renew afresh
+    return true;
+  }
   /// r_max, r_floor for a renewal at the current point; false while no step is known.
   bool radii(double* r_max, double* r_floor) const;
   /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
@@ -161,6 +174,7 @@ class CertifiedPath {
   bool have_prev_ = false;
   Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
   double last_r_ = 0;
+  unsigned served_ = 0, backoff_ = 0;
   double steps_[kStepWindow] = {};
   unsigned nsteps_ = 0, next_ = 0;
   bool sign_ok_ = false, sign_in_ = false;
@@ -183,7 +197,10 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d&
   double r_max, r_floor;
   if (path.cert.covers(p)) {
     ++c.certificate_served;
+    path.served();
     h = path.cert.serve(p, c);
+  } else if (path.backing_off()) {
+    return plain();
   } else if (path.radii(&r_max, &r_floor)) {
     const Vec3d centre = path.ahead(p);
     path.cert.begin(centre, r_max, r_floor, certificate_tol(centre, root_lo, root_size));
