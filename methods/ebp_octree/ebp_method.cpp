@@ -34,6 +34,12 @@ std::vector<ParamSpec> ebp_params() {
        "degrees: face normals closer than this share one bounding plane", {}, 0.5, 90},
       {"coherent", ParamType::boolean, "false",
        "path coherence: seed distance with the previous closest triangle, reuse the previous leaf", {}},
+      {"certificate", ParamType::boolean, "true",
+       "coherent distance: answer from a certificate (the triangles near the last renewal) while the probe "
+       "stays in its ball; same answers", {}},
+      {"chained_sign", ParamType::boolean, "true",
+       "coherent distance on closed meshes: the previous query's sign when the probe stays within its "
+       "distance of it (no inside test); same answers", {}},
       // out of core (ooc_method.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
       {"store", ParamType::text, "", "out of core: answer from this .ebp store through a page cache", {}},
       {"cache_mb", ParamType::integer, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
@@ -134,6 +140,8 @@ class EbpOctreeMethod final : public Method {
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     tree_ = build_tree(mesh, build_params(params_, ctx.threads), ctx.progress);
     query_.emplace(tree_, coherent_);
+    query_->set_certificate(params_.get_bool("certificate"));
+    query_->set_chained_sign(params_.get_bool("chained_sign"));
   }
   bool supports(QueryType) const override { return true; }
   // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
@@ -157,7 +165,8 @@ class EbpOctreeMethod final : public Method {
             {"triangles_tested", c.triangles_tested}, {"hit_white", c.hit_white},
             {"hit_black", c.hit_black}, {"hit_convex", c.hit_convex},
             {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
-            {"exact_fallbacks", c.exact_fallbacks}};
+            {"exact_fallbacks", c.exact_fallbacks}, {"certificate_renewals", c.certificate_renewals},
+            {"certificate_served", c.certificate_served}, {"signs_chained", c.signs_chained}};
   }
   void reset_counters() override {
     if (query_) query_->counters = {};

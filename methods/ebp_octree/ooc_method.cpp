@@ -21,10 +21,14 @@ class EbpOocMethod final : public Method {
       : path_(p.get("store")),
         cache_bytes_(std::size_t(p.get_int("cache_mb")) << 20),
         cold_(p.get_bool("cold")),
-        coherent_(p.get_bool("coherent")) {}
+        coherent_(p.get_bool("coherent")),
+        certificate_(p.get_bool("certificate")),
+        chained_sign_(p.get_bool("chained_sign")) {}
 
   void build(const Mesh& mesh, const BuildContext&) override {
     ooc_.emplace(path_, cache_bytes_, coherent_, cold_);
+    ooc_->set_certificate(certificate_);
+    ooc_->set_chained_sign(chained_sign_);
     const ebp::FileHeader& h = ooc_->store().header();
     if (!mesh.triangles.empty() && h.num_triangles != mesh.num_triangles())
       throw file_error(path_, "built for a mesh of " + std::to_string(h.num_triangles) + " triangles, " + mesh.path +
@@ -49,7 +53,8 @@ class EbpOocMethod final : public Method {
             {"triangles_tested", c.triangles_tested}, {"hit_white", c.hit_white},
             {"hit_black", c.hit_black}, {"hit_convex", c.hit_convex},
             {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
-            {"exact_fallbacks", c.exact_fallbacks}, {"cache_hits", k.hits},
+            {"exact_fallbacks", c.exact_fallbacks}, {"certificate_renewals", c.certificate_renewals},
+            {"certificate_served", c.certificate_served}, {"signs_chained", c.signs_chained}, {"cache_hits", k.hits},
             {"cache_misses", k.misses}, {"bytes_read", k.bytes_read},
             {"cache_evictions", k.evictions}};
   }
@@ -76,7 +81,7 @@ class EbpOocMethod final : public Method {
  private:
   std::string path_;
   std::size_t cache_bytes_;
-  bool cold_, coherent_;
+  bool cold_, coherent_, certificate_, chained_sign_;
   std::optional<ebp::OutOfCore> ooc_;
 };
 

@@ -5,20 +5,31 @@
 #include <cstddef>
 #include <stdexcept>
 
+#include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 
 namespace ebp {
 
 Query::Query(const Octree& tree, bool coherent)
-    : t_(tree), coherent_(coherent), stamp_(tree.num_triangles, 0), leaf_stamp_(tree.leaves.size(), 0) {
+    : t_(tree),
+      coherent_(coherent),
+      stamp_(tree.num_triangles, 0),
+      leaf_stamp_(tree.leaves.size(), 0),
+      path_(std::make_unique<CertifiedPath>()) {
   if (!has_leaf_blocks(t_)) throw std::logic_error("ebp::Query: the Octree lacks its leaf blocks (compute_leaf_blocks)");
   std::uint32_t mb = 0;
   for (const Leaf& lf : t_.leaves) mb = std::max(mb, (lf.tri_count + kBlockTris - 1) / kBlockTris);
   order_.resize(mb);
 }
 
+Query::~Query() = default;
+Query::Query(Query&&) noexcept = default;
+
+void Query::set_scan_kernel(ScanKernel k) { path_->cert.set_kernel(k); }
+
 void Query::reset_path() {
+  path_->reset();
   last_node_ = UINT32_MAX;
   last_tri_ = UINT32_MAX;
   last_leaf_ = UINT32_MAX;

@@ -4,6 +4,7 @@
 /// out-of-core query carries from page to page.
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -16,7 +17,15 @@ struct QueryCounters {
   std::uint64_t nodes_visited = 0, planes_tested = 0, triangles_tested = 0;
   std::uint64_t hit_white = 0, hit_black = 0, hit_convex = 0, hit_concave = 0, hit_special = 0;
   std::uint64_t exact_fallbacks = 0;  ///< parity retried with another reference point
+  // the coherent distance path (certificate.hpp)
+  std::uint64_t certificate_renewals = 0;  ///< relaxed branch and bounds that renewed the certificate
+  std::uint64_t certificate_served = 0;    ///< distance queries answered by a scan of the certificate
+  std::uint64_t signs_chained = 0;         ///< signs taken from the previous query (no inside test)
 };
+
+class DistanceCertificate;
+class CertifiedPath;
+enum class ScanKernel;
 
 struct DistanceAnswer {
   double distance = 0;  ///< signed, negative inside
@@ -34,6 +43,11 @@ struct DistanceBest {
   std::uint32_t k = UINT32_MAX;     ///< LeafTri index of the best, if the last call found it in its tree
   std::uint32_t leaf = UINT32_MAX;  ///< and the leaf it was found in
   std::uint32_t node = UINT32_MAX;  ///< and that leaf's node, if known
+  /// A certificate's renewal (certificate.hpp): every triangle tested is offered to `collect`
+  /// (found in page `collect_page`) instead of updating the best, and the prune radius is the
+  /// collector's (best holds it); the caller takes the answer from the collector.
+  DistanceCertificate* collect = nullptr;
+  std::uint32_t collect_page = UINT32_MAX;
 };
 
 /// Where and how Query::distance_bound starts.
@@ -50,6 +64,8 @@ struct DistanceStart {
 class Query {
  public:
   Query(const Octree& tree, bool coherent);
+  ~Query();
+  Query(Query&&) noexcept;
   bool inside(const Vec3d& p);
   DistanceAnswer distance(const Vec3d& p);
   /// Unsigned distance only (no inside test); fills closest/normal/triangle.
@@ -61,10 +77,19 @@ class Query {
   /// >= the true distance, the answer is the one without it, bit for bit.
   void distance_bound(const Vec3d& p, DistanceBest& b, const DistanceStart& s);
   void reset_path();
+  /// Coherent distance only (both on by default): answer from a certificate while the probe
+  /// stays in its ball (certificate.hpp), and take the sign from the previous query when the
+  /// probe stays in the ball where no surface is (closed meshes). Answers do not change.
+  void set_certificate(bool on) { certificate_ = on; }
+  void set_chained_sign(bool on) { chained_sign_ = on; }
+  /// The certificate's pre-test kernel (tests force the scalar one; must be supported).
+  void set_scan_kernel(ScanKernel k);
   QueryCounters counters;
 
  private:
   class DistanceSearch;  // one distance_bound call, step by step (query_distance.cpp)
+  DistanceAnswer searched_distance(const Vec3d& p);  // the branch and bound, seeded on a coherent path
+  DistanceAnswer certified_distance(const Vec3d& p);  // from the certificate, or renewing it
   std::uint32_t locate(const Vec3d& p, bool* outside_root);
   bool classify_leaf(const Vec3d& p, const Leaf& leaf, std::uint32_t leaf_index, std::uint32_t node);
   const Octree& t_;
@@ -100,6 +125,9 @@ class Query {
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;
+  // coherent distance: the certificate, the probe's steps and the previous sign
+  bool certificate_ = true, chained_sign_ = true;
+  std::unique_ptr<CertifiedPath> path_;
 };
 
 }  // namespace ebp

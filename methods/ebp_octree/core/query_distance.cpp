@@ -15,6 +15,7 @@
 #include <limits>
 #include <utility>
 
+#include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 
@@ -141,6 +142,11 @@ class Query::DistanceSearch {
     const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
     const double d2 = squared_norm(q - p);
     const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
+    if (B.collect) {  // a certificate's renewal: the collector keeps it and sets the prune radius
+      B.best = B.collect->offer(d2, q, key, t, TriangleSite{B.collect_page, k, leaf, scan_node});
+      lim2 = (B.best + tol) * (B.best + tol);
+      return;
+    }
     if (d2 < B.best2 || (d2 == B.best2 && key < B.key)) {
       B.best2 = d2;
       B.best = std::sqrt(d2);
@@ -399,6 +405,10 @@ class Query::DistanceSearch {
 };
 
 DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
+  return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
+}
+
+DistanceAnswer Query::searched_distance(const Vec3d& p) {
   DistanceBest b;
   DistanceStart s;
   if (coherent_) {
@@ -422,6 +432,31 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   return r;
 }
 
+// The coherent path with a certificate (certificate.hpp): a scan of S while p is in its ball,
+// else a renewal (the branch and bound relaxed into a collection, seeded like searched_distance).
+// The first query of a path has no step yet: a plain search.
+DistanceAnswer Query::certified_distance(const Vec3d& p) {
+  TriangleSite site;
+  const DistanceAnswer r = certified_query(
+      *path_, p, t_.root_lo, t_.root_size, counters, &site,
+      [&](DistanceCertificate& cert, const Vec3d& centre) {
+        DistanceBest b;
+        b.collect = &cert;
+        DistanceStart s;
+        s.seed_tri = last_tri_;
+        s.seed_leaf = last_leaf_;
+        s.seed_node = last_leaf_node_;
+        distance_bound(centre, b, s);
+      },
+      [&] { return searched_distance(p); });
+  if (site.k != UINT32_MAX) {
+    last_tri_ = site.k;
+    last_leaf_ = site.leaf;
+    last_leaf_node_ = site.node;
+  }
+  return r;
+}
+
 void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart& s) {
   if (++query_id_ == 0) {  // wrapped: forget every stamp
     std::fill(stamp_.begin(), stamp_.end(), 0u);
@@ -436,7 +471,23 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 
 DistanceAnswer Query::distance(const Vec3d& p) {
   DistanceAnswer r = unsigned_distance(p);
-  if (inside(p)) r.distance = -r.distance;
+  bool in;
+  if (coherent_ && chained_sign_ && t_.closed) {
+    // The chained sign (certificate.hpp): the previous point's, when p is in the ball about it
+    // that holds no surface; the coherent inside state then moves along (the winding number is
+    // the same at p), so that the next inside test steps from p.
+    const Vec3d prev = path_->sign_point();
+    if (path_->sign_chained(p, certificate_tol(p, t_.root_lo, t_.root_size), &in)) {
+      ++counters.signs_chained;
+      if (prev_ok_ && prev_p_ == prev) prev_p_ = p;
+    } else {
+      in = inside(p);
+    }
+    path_->answered(p, r.distance, in);
+  } else {
+    in = inside(p);
+  }
+  if (in) r.distance = -r.distance;
   return r;
 }
 

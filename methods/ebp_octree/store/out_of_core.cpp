@@ -8,6 +8,7 @@
 // the in-memory answer is whatever its visiting order: the same answer, bit for bit.
 #include "methods/ebp_octree/store/out_of_core.hpp"
 
+#include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 
 #include <algorithm>
@@ -20,8 +21,10 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
     : store_(std::make_unique<StoreReader>(path)),
       cache_(*store_, cache_bytes, coherent),
       coherent_(coherent),
-      cold_(cold) {
+      cold_(cold),
+      path_(std::make_unique<CertifiedPath>()) {
   const FileHeader& h = store_->header();
+  closed_ = (h.flags & kStoreClosed) != 0;
   top_ = store_->top_nodes().data();
   top_children_ = store_->top_children().data();
   top_planes_ = store_->top_planes().data();
@@ -34,7 +37,12 @@ OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool cohe
   if (cold_) store_->drop_os_cache();
 }
 
+OutOfCore::~OutOfCore() = default;
+
+void OutOfCore::set_scan_kernel(ScanKernel k) { path_->cert.set_kernel(k); }
+
 void OutOfCore::reset_path() {
+  path_->reset();
   last_page_ = last_k_ = last_leaf_ = last_node_ = UINT32_MAX;
   if (cold_) {
     cache_.clear();
@@ -115,13 +123,14 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
   DistanceStart s;
   s.key_of = e.page->global_tri.data();
   s.node = e.page->chain == 0 ? 0u : e.page->chain - 2;  // chain - 1 is the white dummy
+  bst.b.collect_page = id;
   if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) {
     s.seed_tri = last_k_;
     s.seed_leaf = last_leaf_;
     s.seed_node = last_node_;
   }
   e.query->distance_bound(p, bst.b, s);
-  if (bst.b.k != UINT32_MAX) {
+  if (!bst.b.collect && bst.b.k != UINT32_MAX) {
     const LeafTri& tr = t.tris[bst.b.k];
     bst.page = id;
     bst.k = bst.b.k;
@@ -137,9 +146,8 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
   return r;
 }
 
-DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
+void OutOfCore::search(const Vec3d& p, Best& bst) {
   const std::uint64_t qid = ++query_id_;
-  Best bst;
   auto visit_page = [&](std::uint32_t id) {
     if (page_stamp_[id] == qid) return;
     page_stamp_[id] = qid;
@@ -199,6 +207,15 @@ DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
     }
     for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
   }
+}
+
+DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
+  return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
+}
+
+DistanceAnswer OutOfCore::searched_distance(const Vec3d& p) {
+  Best bst;
+  search(p, bst);
   DistanceAnswer ans;
   if (bst.page == UINT32_MAX) return ans;  // cannot happen: the mesh has a triangle
   ans.distance = bst.b.best;
@@ -214,11 +231,44 @@ DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
   return ans;
 }
 
+// As Query::certified_distance, over the pages: the renewal's collection crosses pages (the
+// prune radius is the running best that the top tree and each page's branch and bound compare
+// with, and each page offers its triangles with its id).
+DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
+  TriangleSite site;
+  const DistanceAnswer r = certified_query(
+      *path_, p, root_lo_, root_size_, top_counters_, &site,
+      [&](DistanceCertificate& cert, const Vec3d& centre) {
+        Best bst;
+        bst.b.collect = &cert;
+        search(centre, bst);
+      },
+      [&] { return searched_distance(p); });
+  if (site.page != UINT32_MAX) {
+    last_page_ = site.page;
+    last_k_ = site.k;
+    last_leaf_ = site.leaf;
+    last_node_ = site.node;
+  }
+  return r;
+}
+
 DistanceAnswer OutOfCore::distance(const Vec3d& p) {
+  // In the tree's frame (FileHeader::origin), translated once in double; the closest point back.
   const Vec3d q = p - origin_;
   DistanceAnswer r = unsigned_distance_frame(q);
+  bool in;
+  if (coherent_ && chained_sign_ && closed_) {  // the chained sign, as Query::distance
+    if (path_->sign_chained(q, certificate_tol(q, root_lo_, root_size_), &in))
+      ++top_counters_.signs_chained;
+    else
+      in = inside_frame(q);
+    path_->answered(q, r.distance, in);
+  } else {
+    in = inside_frame(q);
+  }
+  if (in) r.distance = -r.distance;
   r.closest = r.closest + origin_;
-  if (inside_frame(q)) r.distance = -r.distance;
   return r;
 }
 

@@ -20,12 +20,17 @@ class OutOfCore {
   /// Opens the store (throws bvhbench::InputError on a bad file). `cold`: evict the file from
   /// the OS page cache now and at every reset_path(), and start each path with an empty cache.
   OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold);
+  ~OutOfCore();
   /// Points and closest points in world coordinates (translated once, in double, by the store's
   /// frame origin; FileHeader::origin).
   bool inside(const Vec3d& p) { return inside_frame(p - origin_); }
   DistanceAnswer distance(const Vec3d& p);
   DistanceAnswer unsigned_distance(const Vec3d& p);
   void reset_path();
+  /// As Query's: the certificate and the chained sign on the coherent path (on by default).
+  void set_certificate(bool on) { certificate_ = on; }
+  void set_chained_sign(bool on) { chained_sign_ = on; }
+  void set_scan_kernel(ScanKernel k);
 
   QueryCounters counters() const;  ///< page queries + the top-tree traversal
   void reset_counters();
@@ -50,11 +55,19 @@ class OutOfCore {
   // coherent: page, LeafTri index and leaf (in that page) of the previous closest triangle
   std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX, last_leaf_ = UINT32_MAX, last_node_ = UINT32_MAX;
 
+  bool closed_;
+  bool certificate_ = true, chained_sign_ = true;
+  std::unique_ptr<CertifiedPath> path_;
+
   struct Best;
   // The queries in the tree's frame.
   bool inside_frame(const Vec3d& p);
   DistanceAnswer unsigned_distance_frame(const Vec3d& p);
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
+  /// The branch and bound over the top tree and the pages, from the running best in `b`.
+  void search(const Vec3d& p, Best& b);
+  DistanceAnswer searched_distance(const Vec3d& p);
+  DistanceAnswer certified_distance(const Vec3d& p);
 };
 
 }  // namespace ebp

@@ -13,6 +13,9 @@ void add_counters(QueryCounters& a, const QueryCounters& b) {
   a.hit_concave += b.hit_concave;
   a.hit_special += b.hit_special;
   a.exact_fallbacks += b.exact_fallbacks;
+  a.certificate_renewals += b.certificate_renewals;
+  a.certificate_served += b.certificate_served;
+  a.signs_chained += b.signs_chained;
 }
 
 PageCache::PageCache(const StoreReader& store, std::size_t budget_bytes, bool coherent)

@@ -1,0 +1,228 @@
+#pragma once
+/// The distance certificate of a coherent path (DESIGN.md, "Haptic distance by certificate"). A
+/// renewal at p runs the branch and bound with its prune relaxed (Query::distance_bound with a
+/// collector) and keeps S, every triangle within best + 2r of p, as copies of their float
+/// geometry, input index and where they were found. For any q with |q - p| <= r the closest
+/// triangle of the whole mesh is in S (the proof is in certificate.cpp), so the query at q is a
+/// scan of S: a SIMD lower bound per triangle (certificate_scan.hpp) that only prunes, and the
+/// exact closest point in double, with the same (squared distance, input index) tie rule as the
+/// branch and bound, for the rest. Answers are therefore the branch and bound's, bit for bit.
+///
+/// The radius rule: r = min(r_max, max(kFloorFactor x step, (d_(K+1) - best) / 2)), r_max =
+/// min(kStepFactor x step, kGrowth x the last certificate's r),
+/// K = kNearest, step = the mean of the path's last kStepWindow steps, d_(K+1) the (K+1)-th
+/// smallest triangle distance at p. The step cap keeps S small where triangles are large, the
+/// K-nearest term where they are small, and the floor keeps r > 0 where K+1 triangles tie at a
+/// vertex (DESIGN.md gives the measurements behind the constants).
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "methods/ebp_octree/core/certificate_scan.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+
+namespace ebp {
+
+inline constexpr unsigned kNearest = 32;
+inline constexpr double kStepFactor = 16.0;
+inline constexpr double kFloorFactor = 0.5;
+inline constexpr unsigned kStepWindow = 8;
+inline constexpr double kAheadFactor = 0.8;
+inline constexpr double kGrowth = 2.0;
+inline constexpr unsigned kBackOff = 8;
+
+/// The rule's constants (a struct so that a measurement can vary them in one place).
+struct CertificateRule {
+  unsigned nearest = kNearest;
+  double step_factor = kStepFactor, floor_factor = kFloorFactor, ahead = kAheadFactor, growth = kGrowth;
+};
+
+/// Where a triangle reference was found: the out-of-core page (UINT32_MAX in memory), its
+/// LeafTri index, leaf and leaf node in that tree (the seed of the next branch and bound).
+struct TriangleSite {
+  std::uint32_t page = UINT32_MAX, k = UINT32_MAX, leaf = UINT32_MAX, node = UINT32_MAX;
+};
+
+/// A bound on the rounding error of a computed point-triangle distance near p, in a tree whose
+/// root cube is (root_lo, root_size): 4x the branch and bound's own `tol`.
+double certificate_tol(const Vec3d& p, const Vec3d& root_lo, double root_size);
+
+/// One answer of the certificate: the winner's squared distance, closest point, input index, site.
+struct CertifiedHit {
+  double d2 = 0;
+  Vec3d closest, normal;
+  std::uint64_t key = UINT64_MAX;
+  TriangleSite site;
+};
+
+class DistanceCertificate {
+ public:
+  DistanceCertificate();
+  /// Forces a kernel (tests: the scalar one on an AVX2 machine). Must be supported by the CPU.
+  void set_kernel(ScanKernel k) { kernel_ = k; }
+  ScanKernel kernel() const { return kernel_; }
+  const CertificateRule& rule() const { return rule_; }
+
+  // --- renewal ---
+  /// Starts collecting at p with the rule's radii (r_max >= r_floor >= 0) and rounding bound tol.
+  void begin(const Vec3d& p, double r_max, double r_floor, double tol);
+  /// A triangle the relaxed branch and bound tested exactly (squared distance d2 to p, tie key,
+  /// float geometry, site); returns the prune radius from now on (it never grows): every
+  /// triangle within it must still be offered.
+  /// `closest` is the exact closest point the branch and bound computed (kept for the winner).
+  double offer(double d2, const Vec3d& closest, std::uint64_t key, const LeafTri& t, const TriangleSite& site);
+  /// The prune radius (infinite before the first offer).
+  double radius() const { return prune_; }
+  /// Ends the renewal: the winner (the lexicographic minimum of what was offered, which is the
+  /// mesh's when nothing within the prune radius was left out), r, S packed for the scan.
+  /// Returns false if nothing was offered (no certificate then).
+  bool finish(CertifiedHit* winner);
+
+  // --- serving ---
+  bool valid() const { return valid_; }
+  /// |q - centre| <= r: q's closest triangle is in S.
+  bool covers(const Vec3d& q) const;
+  /// The lexicographic minimum of (squared distance, key) over S at q (q covered).
+  CertifiedHit serve(const Vec3d& q, QueryCounters& c);
+  void clear() { valid_ = false; }
+  std::uint32_t size() const { return std::uint32_t(members_.size()); }
+  double r() const { return r_; }
+
+ private:
+  struct Member {
+    float a[3], b[3], c[3];
+    std::uint64_t key;
+    TriangleSite site;
+    double d;  ///< distance at the centre (collection only)
+    Vec3d normal;  ///< the face normal an answer gives (computed once, at renewal)
+  };
+  static bool better(double d2, std::uint64_t key, double d2b, std::uint64_t keyb) {
+    return d2 < d2b || (d2 == d2b && key < keyb);
+  }
+  /// The directions of a triangle's bound (float face normal, outward edge normals) and its
+  /// answer's normal: functions of its geometry alone, so kept from renewal to renewal (the
+  /// next certificate shares most of S) in a small direct-mapped table by input index.
+  struct Directions {
+    std::uint64_t key = UINT64_MAX;
+    bool plane = false;  ///< false: no usable plane (zero area), the bound is 0
+    float n[3], m[3][3];
+    Vec3d normal;
+  };
+  static constexpr std::size_t kDirectionSlots = 256;
+  const Directions& directions(const Member& m);
+  void update_prune();
+  void pack(double r);
+  void exact(std::uint32_t i, const Vec3d& q, CertifiedHit* hit, QueryCounters& c) const;
+
+  ScanKernel kernel_;
+  CertificateRule rule_;
+  bool valid_ = false;
+  Vec3d centre_;
+  double r_ = 0, r2_ = 0, r_max_ = 0, r_floor_ = 0, tol_ = 0;
+  double prune_ = 0, best_ = 0;
+  CertifiedHit win_;          ///< the collection's lexicographic minimum so far
+  std::uint32_t win_index_ = 0;
+  std::vector<double> heap_;  ///< max-heap of the kNearest + 1 smallest distances offered
+  std::vector<Member> members_;
+  std::vector<Directions> directions_ = std::vector<Directions>(kDirectionSlots);
+  std::vector<float> pack_;  ///< blocks x kScanRows x kScanLanes
+  std::vector<std::uint8_t> masks_;
+  std::uint32_t current_ = 0;  ///< S's last winner: tested first, its distance the running best
+};
+
+/// The path state a coherent distance needs besides the tree's: the mean step of the probe and
+/// the certificate, and the previous query's sign and distance (the chained sign).
+class CertifiedPath {
+ public:
+  /// A new path: forget the steps, the certificate and the sign.
+  void reset();
+  /// Records q as the path's next point (before answering it).
+  void step_to(const Vec3d& q);
+  /// Where the next certificate is centred for a renewal at q (the current point): ahead of q
+  /// along the last step, by kAheadFactor x the last certificate's radius, so that the probe
+  /// crosses the ball instead of starting at its centre (fewer renewals on a straight slide).
+  Vec3d ahead(const Vec3d& q) const;
+  /// Records the renewal just finished (its radius sets the next offset).
+  void renewed() {
+    last_r_ = cert.r();
+    served_ = 0;
+  }
+  void served() { ++served_; }
+  /// A probe that leaves each ball at once (a jittery walk, not a slide) makes every renewal a
+  /// loss: when a certificate served no query, the next kBackOff queries are plain searches.
+  bool backing_off() {
+    if (served_ == 0 && cert.valid() && backoff_ == 0) backoff_ = kBackOff;
+    if (backoff_ == 0) return false;
+    if (--backoff_ == 0) cert.clear();  // then renew afresh
+    return true;
+  }
+  /// r_max, r_floor for a renewal at the current point; false while no step is known.
+  bool radii(double* r_max, double* r_floor) const;
+  /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
+  /// bound tol): that open ball holds no surface point, so the winding number is constant in
+  /// it. Only on closed meshes (elsewhere the sign is not a function of the winding number).
+  bool sign_chained(const Vec3d& q, double tol, bool* inside) const;
+  /// The point of the last answered() (meaningful once sign_chained has returned true).
+  const Vec3d& sign_point() const { return sign_p_; }
+  /// Records q's answer (unsigned distance, sign) for the next sign_chained.
+  void answered(const Vec3d& q, double distance, bool inside);
+
+  DistanceCertificate cert;
+
+ private:
+  bool have_prev_ = false;
+  Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
+  double last_r_ = 0;
+  unsigned served_ = 0, backoff_ = 0;
+  double steps_[kStepWindow] = {};
+  unsigned nsteps_ = 0, next_ = 0;
+  bool sign_ok_ = false, sign_in_ = false;
+  Vec3d sign_p_;
+  double sign_best_ = 0;
+};
+
+/// One coherent unsigned distance query on the certificate path, in memory or out of core: a
+/// scan of S when it covers p; else, once the path has a step, a renewal at the centre
+/// path.ahead(p): begin(), then `renew(cert, centre)` runs the tree's branch and bound at the
+/// centre with `cert` as its collector, then finish(), and p is served from the new certificate
+/// (or, if its ball turned out too small to hold p, answered by `plain()`); else (the path's
+/// first point) `plain()`, the branch and bound alone. On a certified answer *site is where its
+/// triangle was found (the next renewal's seed). The tree's root cube: root_lo, root_size.
+template <class Renew, class Plain>
+DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d& root_lo, double root_size,
+                               QueryCounters& c, TriangleSite* site, Renew&& renew, Plain&& plain) {
+  path.step_to(p);
+  CertifiedHit h;
+  double r_max, r_floor;
+  if (path.cert.covers(p)) {
+    ++c.certificate_served;
+    path.served();
+    h = path.cert.serve(p, c);
+  } else if (path.backing_off()) {
+    return plain();
+  } else if (path.radii(&r_max, &r_floor)) {
+    const Vec3d centre = path.ahead(p);
+    path.cert.begin(centre, r_max, r_floor, certificate_tol(centre, root_lo, root_size));
+    renew(path.cert, centre);
+    ++c.certificate_renewals;
+    if (!path.cert.finish(&h)) return DistanceAnswer{};  // cannot happen: the mesh has a triangle
+    path.renewed();
+    if (!(centre == p)) {
+      if (!path.cert.covers(p)) return plain();
+      h = path.cert.serve(p, c);
+    }
+  } else {
+    path.cert.clear();
+    return plain();
+  }
+  *site = h.site;
+  DistanceAnswer r;
+  r.distance = std::sqrt(h.d2);
+  r.closest = h.closest;
+  r.normal = h.normal;
+  r.triangle = std::int64_t(h.key);
+  return r;
+}
+
+}  // namespace ebp
