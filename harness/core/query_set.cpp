@@ -1,6 +1,7 @@
 // Query sets: the registered kinds (query_kinds*.cpp) and their generation.
 #include "harness/core/query_set.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "harness/core/mesh.hpp"

@@ -1,5 +1,6 @@
 #include "harness/run/thread_replay.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <mutex>

@@ -91,6 +91,9 @@ double surface_area(const Mesh& mesh) {
   return a;
 }
 
+/// World point p in the field's index space (origin at the mesh box centre, one unit a voxel).
+inline Vec3d index_coords(const Vec3d& p, const Vec3d& origin, double inv_voxel) { return (p - origin) * inv_voxel; }
+
 /// The built field and what queries read, shared read-only by every thread's queries.
 struct Field {
   FloatGrid::Ptr sdf;
@@ -147,7 +150,7 @@ class OpenVdbQueries final : public QueryState {
   }
 
  private:
-  Vec3d to_index(const Vec3d& p) const { return (p - f_.origin) * f_.inv_voxel; }
+  Vec3d to_index(const Vec3d& p) const { return index_coords(p, f_.origin, f_.inv_voxel); }
 
   bool in_domain(const Vec3d& x) const {
     return f_.has_domain && x.x >= f_.dom_lo.x && x.y >= f_.dom_lo.y && x.z >= f_.dom_lo.z &&
@@ -376,7 +379,7 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
     // ---- the mesh in index space; polygon i is mesh triangle i ----
     std::vector<openvdb::Vec3s> pts(mesh.vertices.size());
     for (std::size_t i = 0; i < pts.size(); ++i) {
-      const Vec3d x = to_index(mesh.vertices[i]);
+      const Vec3d x = index_coords(mesh.vertices[i], origin_, inv_voxel_);
       pts[i] = openvdb::Vec3s(float(x.x), float(x.y), float(x.z));
     }
     std::vector<openvdb::Vec3I> tris(mesh.triangles.size());
