@@ -155,9 +155,10 @@ TEST_P(ConcurrentQueries, SplitPointsAnswerAsOneThread) {
       for (std::size_t i = 0; i < part.n; ++i) {
         ASSERT_TRUE(same_answer(got, part.offset + i, ref, i))
             << threads << " threads: query " << part.offset + i << " differs from a single thread's replay of its part";
-        if (!coherent)
+        if (!coherent) {
           ASSERT_TRUE(same_answer(got, part.offset + i, whole, part.offset + i))
               << threads << " threads: query " << part.offset + i << " differs from the whole set's replay";
+        }
       }
     }
   }
