@@ -579,6 +579,66 @@ def latency_haptic(rs):
 
 
 # ---------------------------------------------------------------------------------------------
+# Thread scaling
+# ---------------------------------------------------------------------------------------------
+def thread_scaling(rs):
+    """Throughput against query threads, per (model, query, query kind), with the ideal line."""
+    jobs = [j for j in rs.thread_jobs() if j.ok and j.qps]
+    if not any(j.threads > 1 for j in jobs):
+        raise NoData("no ok job ran its queries on more than one thread (a suite's threads: axis)")
+    scaled = {(j.mesh, j.query, j.kind, j.config) for j in jobs if j.threads > 1}
+    panels = sorted({(m, q, k) for m, q, k, _ in scaled},
+                    key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), p[1] != "inside", _kind_key(p[2])))
+    panels = panels[:MAX_PANELS]
+    fig, axes = _grid(len(panels), max_cols=2)
+    configs = sorted({(j.method, j.params_key) for j in jobs if (j.mesh, j.query, j.kind, j.config) in scaled},
+                     key=lambda c: (method_sort_key(c[0]), c[1]))
+    cores = {int(c) for c in (j.num("context.cores") for j in jobs) if c}
+    for ax, (mesh, query, kind) in zip(axes, panels):
+        all_t = set()
+        for cfg in configs:
+            here = [j for j in jobs if (j.mesh, j.query, j.kind) == (mesh, query, kind)
+                    and (j.method, j.params_key) == cfg]
+            by_t = {}
+            for j in here:
+                by_t.setdefault(j.threads, []).append(
+                    (j.qps, j.num("queries.threads.single_thread_qps.median")))
+            if not any(t > 1 for t in by_t):
+                continue
+            ts = sorted(by_t)
+            ys = [median([q for q, _ in by_t[t]]) for t in ts]
+            # The ideal's base: the T = 1 job's throughput, else the one-thread passes the
+            # T > 1 jobs timed beside their own (queries.threads.single_thread_qps).
+            singles = [s for t in ts for _, s in by_t[t] if s]
+            base = ys[0] if ts[0] == 1 else (median(singles) if singles else None)
+            _plot_cfg(ax, ts, ys, cfg)
+            if base:
+                ideal_t = sorted(set(ts) | {1})
+                ax.plot(ideal_t, [base * t for t in ideal_t], color=method_color(cfg[0]),
+                        linestyle=":", linewidth=1.0, zorder=1)
+            all_t |= set(ts)
+        for c in sorted(cores):
+            ax.axvline(c, color="#888888", linestyle="--", linewidth=0.8)
+            ax.text(c, 0.02, f" {c} cores", transform=ax.get_xaxis_transform(), fontsize=7,
+                    color="#555555", ha="left", va="bottom")
+        ax.set_xscale("log", base=2)
+        ticks = sorted(all_t | {1})
+        ax.set_xticks(ticks)
+        ax.set_xticklabels([str(t) for t in ticks])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_yscale("log")
+        _log_ticks(ax, "y", _si_formatter("q/s"))
+        ax.tick_params(labelsize=7)
+        ax.grid(True, which="major", alpha=0.3)
+        ax.set_xlabel("Query threads", fontsize=8)
+        ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
+        ax.set_title(_mesh_title(rs, mesh, f"{query} · {kind}"), fontsize=9)
+    handles = [_cfg_handle(c) for c in configs]
+    handles.append(Line2D([], [], color="#555555", linestyle=":", label="ideal: T \u00d7 one thread"))
+    return _finish(fig, handles, "method")
+
+
+# ---------------------------------------------------------------------------------------------
 # Stability matrix
 # ---------------------------------------------------------------------------------------------
 def stability_matrix(rs):
@@ -686,6 +746,12 @@ CHARTS = {
         "For each method, the share of queries slower than a given latency, from the recorded "
         "percentiles (p50, p99, p99.9, max). The dashed line is the 1 ms haptic deadline; the "
         "legend gives the share of queries that missed it."),
+    "thread_scaling": Chart(
+        thread_scaling, "Throughput against query threads",
+        "Aggregate queries per second with T query threads (a suite's `threads:` axis), each "
+        "with its own query state: random points split between the threads, haptic paths as T "
+        "independent probes. Dotted: the ideal, T times the one-thread throughput (the T = 1 "
+        "job's). Dashed vertical: the machine's cores; beyond it the threads share them."),
     "stability_matrix": Chart(
         stability_matrix, "Stability matrix",
         "Each method configuration (rows) on each stress case (columns), over every query kind "

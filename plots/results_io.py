@@ -119,6 +119,12 @@ class Job:
         return as_str(self.get("job.query"), "?") or "?"
 
     @property
+    def threads(self):
+        """Query threads (job.threads; 1 in results older than the thread axis)."""
+        t = self.num("job.threads")
+        return int(t) if t and t >= 1 else 1
+
+    @property
     def kind(self):
         return as_str(self.get("job.queries.kind"), "?") or "?"
 
@@ -202,7 +208,12 @@ class ResultSet:
         return [j for j in self.jobs if not j.ok]
 
     def model_jobs(self):
-        """Jobs on regular models (not stress cases): what the scaling charts and tables use."""
+        """Single-thread jobs on regular models (not stress cases): what the scaling charts and
+        tables use. Jobs on more threads are the thread-scaling chart's (thread_jobs)."""
+        return [j for j in self.jobs if j.mesh not in self.stress_meshes and j.threads == 1]
+
+    def thread_jobs(self):
+        """Jobs on regular models of every thread count: the thread axis."""
         return [j for j in self.jobs if j.mesh not in self.stress_meshes]
 
     def meshes(self, jobs=None):

@@ -21,7 +21,8 @@ nlohmann::json method_json(const MethodInfo& m) {
                        {"distance", m.caps.distance},
                        {"closest_triangle", m.caps.closest_triangle},
                        {"coherence", m.caps.coherence},
-                       {"out_of_core", m.caps.out_of_core}};
+                       {"out_of_core", m.caps.out_of_core},
+                       {"concurrent_queries", m.caps.concurrent_queries}};
   j["testing_only"] = m.testing_only;
   nlohmann::json ps = nlohmann::json::array();
   for (auto& p : m.params) {
@@ -65,6 +66,7 @@ void add_methods_command(CLI::App& app) {
       add(m.caps.closest_triangle, "closest-triangle");
       add(m.caps.coherence, "coherence");
       add(m.caps.out_of_core, "out-of-core");
+      add(m.caps.concurrent_queries, "concurrent-queries");
       std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
                 << "  " << m.description << "\n"
                 << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n";

@@ -33,7 +33,7 @@ void add_run_command(CLI::App& app) {
       ->required();
   cmd->add_option("--query", *query, "inside | distance")->check(CLI::IsMember({"inside", "distance"}));
   cmd->add_option("--repeat", spec->repeat, "Timed passes after the warm-up")->check(CLI::Range(1, 1000));
-  cmd->add_option("--threads", spec->threads, "Thread budget")->check(CLI::Range(1, 1024));
+  cmd->add_option("--threads", spec->threads, "Query threads T (random points split, haptic paths as T probes); also the build's thread budget")->check(CLI::Range(1, 1024));
   cmd->add_option("--truth", spec->truth_path, "Oracle .npz (bvhbench truth) -> accuracy block");
   cmd->add_option("--answers", spec->answers_path, "Write the per-query answers to this .npz");
   cmd->add_option("--out", *out, "Result JSON (default: stdout)");

@@ -10,6 +10,11 @@
 ///      from one query to the next, declared as a parameter);
 ///   4. counters() are read after the counted pass, structure_bytes() after build.
 /// Virtual calls happen here, once per query, never per primitive.
+///
+/// Threads (a job's `threads` T > 1): a method whose queries may run concurrently hands out one
+/// QueryState per thread over its shared, built structure (new_query_state()); each thread replays
+/// its own part of the queries through its own state, with its own path state and counters. A
+/// method that hands out none is `unsupported` for T > 1: never run from two threads at once.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -43,6 +48,9 @@ struct Capabilities {
   bool closest_triangle = false;  ///< distance() fills `triangle`
   bool coherence = false;         ///< has a coherent (path-state) variant as a parameter
   bool out_of_core = false;
+  /// Hands out per-thread query states (Method::new_query_state): runs at threads > 1. Declared
+  /// here so that `bvhbench methods` and a suite can tell before building; false by default.
+  bool concurrent_queries = false;
 };
 
 /// A named work counter, summed over the queries since reset_counters().
@@ -62,18 +70,37 @@ struct BuildContext {
   Progress* progress = nullptr;          ///< optional; methods may create their own
 };
 
-class Method {
+/// What one thread asks with: the queries, the state carried from one query to the next along a
+/// path, and the work counters. A Method is one (its own, for a single thread); a method that
+/// declares concurrent queries makes more (Method::new_query_state), one per thread.
+///
+/// Cache-line aligned, so that the states of two threads never share a line: each writes its
+/// counters and path state in the hot loop (false sharing would serialise them at many threads).
+class alignas(64) QueryState {
  public:
-  virtual ~Method() = default;
-
-  /// Builds the structure. May throw InputError (input it refuses), UnsupportedError, or
-  /// anything else (becomes status `error`).
-  virtual void build(const Mesh& mesh, const BuildContext& ctx) = 0;
+  virtual ~QueryState() = default;
 
   /// Point-in-solid. Default: unsupported.
   virtual bool inside(const Vec3d& p);
   /// Signed distance, closest point, contact normal, closest triangle. Default: unsupported.
   virtual DistanceResult distance(const Vec3d& p);
+
+  /// Forgets state carried between consecutive queries (called before each replay pass).
+  virtual void reset_path() {}
+
+  /// Work counters since the last reset_counters() (totals, not means).
+  virtual std::vector<Counter> counters() const { return {}; }
+  virtual void reset_counters() {}
+};
+
+class Method : public QueryState {
+ public:
+  /// Builds the structure. May throw InputError (input it refuses), UnsupportedError, or
+  /// anything else (becomes status `error`).
+  virtual void build(const Mesh& mesh, const BuildContext& ctx) = 0;
+
+  /// Whether this instance (with its parameters) answers q. Defaults to the registered caps.
+  virtual bool supports(QueryType q) const = 0;
 
   /// Whether this instance answers the whole query set per call (a Python method's
   /// `batch=true`). The harness then calls inside_batch()/distance_batch() instead of
@@ -86,18 +113,17 @@ class Method {
   /// Every point of `points`, in order: `out` gets points.size() answers. Default: unsupported.
   virtual void distance_batch(const std::vector<Vec3d>& points, std::vector<DistanceResult>& out);
 
-  /// Whether this instance (with its parameters) answers q. Defaults to the registered caps.
-  virtual bool supports(QueryType q) const = 0;
-
-  /// Forgets state carried between consecutive queries (called before each replay pass).
-  virtual void reset_path() {}
+  /// A new query state over this method's built structure, for one more thread. Called after
+  /// build(), never concurrently with itself; the state may then run on any one thread at the
+  /// same time as this method's own queries and every other state's, and answers exactly as this
+  /// method would on the same sequence of queries (the same answers, path state and counters).
+  /// It must not outlive the method. nullptr (the default): this method's queries must never run
+  /// concurrently, and a job with threads > 1 is `unsupported`. A method that returns states
+  /// declares Capabilities::concurrent_queries.
+  virtual std::unique_ptr<QueryState> new_query_state() const { return nullptr; }
 
   /// Bytes of the method's own structure, including its copy of the geometry.
   virtual std::size_t structure_bytes() const = 0;
-
-  /// Work counters since the last reset_counters() (totals, not means).
-  virtual std::vector<Counter> counters() const { return {}; }
-  virtual void reset_counters() {}
 
   /// Facts about the built structure worth recording (levels, node counts, ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }

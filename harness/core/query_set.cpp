@@ -1,6 +1,7 @@
 // Query sets: the registered kinds (query_kinds*.cpp) and their generation.
 #include "harness/core/query_set.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "harness/core/mesh.hpp"
@@ -52,6 +53,38 @@ std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, s
     *meta = m;
   }
   return pts;
+}
+
+bool replays_as_probes(const QuerySet& qs) {
+  const QueryKind* k = find_query_kind(qs.kind());
+  return k && k->ordered && qs.meta.contains("seed") && qs.meta["seed"].is_number_unsigned();
+}
+
+std::uint64_t probe_seed(std::uint64_t seed, int k) {
+  if (k == 0) return seed;
+  // splitmix64's finaliser over (seed, k): consecutive k land far apart, and no k >= 1 gives
+  // back `seed` itself or a small neighbour of it (which a suite may use for another set).
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * std::uint64_t(k);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+std::vector<std::vector<Vec3d>> probe_paths(const Mesh& mesh, const QuerySet& qs, int probes) {
+  std::vector<std::vector<Vec3d>> paths;
+  paths.reserve(std::size_t(std::max(1, probes)));
+  paths.push_back(qs.points);
+  if (probes <= 1) return paths;
+  const std::uint64_t seed = qs.meta.at("seed").get<std::uint64_t>();
+  std::map<std::string, double> params;
+  if (qs.meta.contains("params") && qs.meta["params"].is_object())
+    for (auto& [key, v] : qs.meta["params"].items()) {
+      if (!v.is_number()) throw InputError(qs.path + ": sidecar parameter '" + key + "' is not a number");
+      params[key] = v.get<double>();
+    }
+  for (int k = 1; k < probes; ++k)
+    paths.push_back(generate_queries(mesh, qs.kind(), qs.points.size(), probe_seed(seed, k), params, nullptr));
+  return paths;
 }
 
 const QueryKind* find_query_kind(const std::string& name) {

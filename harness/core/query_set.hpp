@@ -44,6 +44,22 @@ struct QueryKind {
 };
 
 const std::vector<QueryKind>& query_kinds();
+
+/// Whether T threads replay `qs` as T independent probes (a path of a registered ordered kind,
+/// such as haptic, made by the generator: its sidecar gives kind, seed and parameters), rather
+/// than splitting its points between them.
+bool replays_as_probes(const QuerySet& qs);
+
+/// The seed of probe k when a path generated from `seed` is replayed by several probes: k = 0 is
+/// the path itself (`seed`); every other probe's is seeded apart (splitmix64 of seed and k), the
+/// same on every machine.
+std::uint64_t probe_seed(std::uint64_t seed, int k);
+
+/// The `probes` paths that many probes replay (replays_as_probes(qs)): path 0 is qs's own points,
+/// path k the generator's path of the same kind, length and parameters from probe_seed(seed, k)
+/// on `mesh`. Throws InputError when the sidecar cannot be regenerated (a kind or parameter this
+/// build does not know).
+std::vector<std::vector<Vec3d>> probe_paths(const Mesh& mesh, const QuerySet& qs, int probes);
 const QueryKind* find_query_kind(const std::string& name);
 
 /// Generates a query set and its sidecar meta (kind, n, seed, mesh_sha256, mesh path, params,

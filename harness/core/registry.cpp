@@ -14,8 +14,8 @@ QueryType parse_query_type(const std::string& s) {
   throw InputError("query type '" + s + "': expected 'inside' or 'distance'");
 }
 
-bool Method::inside(const Vec3d&) { throw UnsupportedError("inside queries are not supported"); }
-DistanceResult Method::distance(const Vec3d&) {
+bool QueryState::inside(const Vec3d&) { throw UnsupportedError("inside queries are not supported"); }
+DistanceResult QueryState::distance(const Vec3d&) {
   throw UnsupportedError("distance queries are not supported");
 }
 void Method::inside_batch(const std::vector<Vec3d>&, std::vector<std::uint8_t>&) {

@@ -22,6 +22,16 @@ void Answers::resize(QueryType t, std::size_t n) {
   }
 }
 
+void Answers::keep_first(std::size_t n) {
+  if (inside.size() > n) inside.resize(n);
+  if (distance.size() > n) {
+    distance.resize(n);
+    closest.resize(n);
+    normal.resize(n);
+    triangle.resize(n);
+  }
+}
+
 void Answers::write_npz(const std::string& path) const {
   std::map<std::string, NpyArray> a;
   if (type == QueryType::inside) {

@@ -19,6 +19,8 @@ struct Answers {
   std::vector<Vec3d> closest, normal;    ///< N x 3
   std::vector<std::int64_t> triangle;    ///< N, -1 where unknown
   void resize(QueryType t, std::size_t n);
+  /// Drops every answer after the first n (the query set's, when other probes' paths follow).
+  void keep_first(std::size_t n);
   void write_npz(const std::string& path) const;
 };
 

@@ -23,6 +23,10 @@ std::vector<std::string> run_arguments(const JobSpec& spec) {
     args.push_back("--truth");
     args.push_back(spec.truth_path);
   }
+  if (spec.threads != 1) {
+    args.push_back("--threads");
+    args.push_back(std::to_string(spec.threads));
+  }
   return args;
 }
 

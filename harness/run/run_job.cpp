@@ -23,6 +23,7 @@
 #include "harness/run/calibration.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/system_info.hpp"
+#include "harness/run/thread_replay.hpp"
 #include "harness/util/atomic_file.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/printable.hpp"
@@ -104,14 +105,6 @@ double median(std::vector<double> v) {
   return percentile(v, 0.5);
 }
 
-/// Keeps the compiler from discarding query results in timed loops.
-struct Sink {
-  double acc = 0;
-  void take(bool b) { acc += b ? 1.0 : 0.0; }
-  void take(const DistanceResult& d) { acc += d.distance + double(d.triangle); }
-};
-volatile double g_sink;
-
 /// Reused output buffers of a batch method's calls, so that a timed pass allocates nothing.
 struct BatchBuffers {
   std::vector<std::uint8_t> inside;
@@ -135,30 +128,13 @@ void batch_call(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuf
   }
 }
 
-// One timed pass over all queries; returns seconds.
-double timed_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& batch) {
-  Sink s;
+/// One timed pass of a batch method (one call answering every point, path reset first, untimed):
+/// its wall time in seconds. The answers land in `batch`, so the call cannot be optimised away.
+double timed_batch_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& batch) {
   m.reset_path();
-  if (m.answers_in_batches()) {
-    auto t0 = Clock::now();
-    batch_call(m, qt, pts, batch);
-    auto t1 = Clock::now();
-    if (qt == QueryType::inside) {
-      for (auto b : batch.inside) s.take(b != 0);
-    } else {
-      for (const auto& d : batch.distance) s.take(d);
-    }
-    g_sink = s.acc;
-    return std::chrono::duration<double>(t1 - t0).count();
-  }
   auto t0 = Clock::now();
-  if (qt == QueryType::inside) {
-    for (const auto& p : pts) s.take(m.inside(p));
-  } else {
-    for (const auto& p : pts) s.take(m.distance(p));
-  }
+  batch_call(m, qt, pts, batch);
   auto t1 = Clock::now();
-  g_sink = s.acc;
   return std::chrono::duration<double>(t1 - t0).count();
 }
 
@@ -198,6 +174,12 @@ json run_job(const JobSpec& spec) {
       return r;
     }
 
+    if (spec.threads > 1 && !info->caps.concurrent_queries) {
+      fail(status::unsupported, info->name + " does not declare concurrent queries: threads must be 1 (asked " +
+                                    std::to_string(spec.threads) + ")");
+      return r;
+    }
+
     Progress load_progress("loading " + spec.mesh_path, 1.0, spec.progress);
     Mesh mesh = load_mesh(spec.mesh_path, nullptr);
     load_progress.finish();
@@ -212,11 +194,22 @@ json run_job(const JobSpec& spec) {
     if (qs.meta.contains("mesh_sha256") && qs.meta["mesh_sha256"] != mesh.sha256)
       r["job"]["queries"]["mesh_mismatch"] = true;
 
+    // ---- the threads' queries: T probes of a generated path, or the set split in T parts ------
+    const bool probes = spec.threads > 1 && replays_as_probes(qs);
+    std::vector<std::vector<Vec3d>> probe_points;  // probes: every thread's path (path 0 = the set's)
+    if (probes) {
+      Progress probe_progress("making " + std::to_string(spec.threads - 1) + " more probe paths", 1.0, spec.progress);
+      probe_points = probe_paths(mesh, qs, spec.threads);
+      probe_progress.finish();
+    }
+
     // ---- build ------------------------------------------------------------------------------
     BuildContext ctx;
     ctx.threads = spec.threads;
     ctx.query_type = spec.query_type;
     ctx.query_bounds = qs.bounds();
+    for (const auto& path : probe_points)  // every probe's path: methods size bands and caches from it
+      for (const Vec3d& p : path) ctx.query_bounds.add(p);
     ctx.query_kind = qs.kind();
     ctx.tmp_dir = spec.tmp_dir;
     ctx.memory_budget_bytes = spec.memory_budget_bytes;
@@ -240,13 +233,18 @@ json run_job(const JobSpec& spec) {
     // ---- counted warm-up pass: answers and work counters ----------------------------------------
     const auto& pts = qs.points;
     const std::size_t n = pts.size();
+    ThreadedReplay replay(*method, spec.query_type,
+                          probes ? probe_streams(probe_points) : split_streams(pts, spec.threads));
+    const std::size_t total = replay.total();  // queries per pass, over all threads
     Answers answers;
-    answers.resize(spec.query_type, n);
-    method->reset_counters();
-    method->reset_path();
+    // A batch method (a Python method's batch=true) answers the whole set in one call; it declares
+    // no concurrent queries, so it runs on one thread (threads > 1 was refused above).
     const bool batch = method->answers_in_batches();
     BatchBuffers batch_buffers;
     if (batch) {
+      answers.resize(spec.query_type, n);
+      method->reset_counters();
+      method->reset_path();
       batch_call(*method, spec.query_type, pts, batch_buffers);
       if (spec.query_type == QueryType::inside) {
         answers.inside = batch_buffers.inside;
@@ -259,67 +257,54 @@ json run_job(const JobSpec& spec) {
           answers.triangle[i] = d.triangle;
         }
       }
-    } else if (spec.query_type == QueryType::inside) {
-      for (std::size_t i = 0; i < n; ++i) answers.inside[i] = method->inside(pts[i]) ? 1 : 0;
     } else {
-      for (std::size_t i = 0; i < n; ++i) {
-        DistanceResult d = method->distance(pts[i]);
-        answers.distance[i] = d.distance;
-        answers.closest[i] = d.closest;
-        answers.normal[i] = d.normal;
-        answers.triangle[i] = d.triangle;
-      }
+      replay.counted_pass(&answers);
     }
     json counters = json::object();
-    for (const Counter& c : method->counters())
-      counters[c.name] = n ? double(c.value) / double(n) : 0.0;
+    for (const Counter& c : replay.counters())
+      counters[c.name] = total ? double(c.value) / double(total) : 0.0;
     r["counters"] = counters;
+    // The oracle and the answers file are for the query set: the other probes' paths have none.
+    answers.keep_first(n);
     // Which of them only compare exactly on a like machine, and the machine they were counted on.
     r["machine_dependent"] = {{"counters", info->machine_dependent_counters},
                               {"fingerprint", machine_fingerprint(method->machine_facts())}};
     std::size_t query_rss = current_rss_bytes();
 
     r["calibration"] = measure_calibration();
-    // ---- throughput: `repeat` passes ----------------------------------------------------------
-    std::vector<double> qps, pass_seconds;
-    Progress qprog("querying " + info->name, spec.repeat + 1, spec.progress);
+    // ---- throughput: `repeat` passes on T threads; with T > 1 each followed by a pass on one
+    // thread (the same set, or probe 0's path), so the speed-up compares passes taken together --
+    const bool with_single = spec.threads > 1;
+    const ThreadStream single_stream{pts.data(), n, 0};
+    std::vector<double> qps, pass_seconds, single_qps;
+    Progress qprog("querying " + info->name + (spec.threads > 1 ? " on " + std::to_string(spec.threads) + " threads" : ""),
+                   spec.repeat * (with_single ? 2 : 1) + 1, spec.progress);
     for (int rep = 0; rep < spec.repeat; ++rep) {
-      double s = timed_pass(*method, spec.query_type, pts, batch_buffers);
+      double s = batch ? timed_batch_pass(*method, spec.query_type, pts, batch_buffers) : replay.timed_pass();
       pass_seconds.push_back(s);
-      qps.push_back(s > 0 ? double(n) / s : 0.0);
+      qps.push_back(s > 0 ? double(total) / s : 0.0);
       query_rss = std::max(query_rss, current_rss_bytes());
-      qprog.update(rep + 1);
+      if (with_single) {
+        const double s1 = replay.single_thread_pass(single_stream);
+        single_qps.push_back(s1 > 0 ? double(n) / s1 : 0.0);
+        qprog.update(2 * rep + 2);
+      } else {
+        qprog.update(rep + 1);
+      }
     }
 
-    // ---- latency: one pass with per-query timestamps ------------------------------------------
+    // ---- latency: one pass with per-query timestamps, on every thread ---------------------------
     // A batch method answers every query in one call: no query has a latency of its own, so none
     // is recorded (the fields are null) rather than the pass time spread evenly over the queries.
-    std::vector<double> lat(batch ? 0 : n);
-    if (!batch) {
-      Sink s;
-      method->reset_path();
-      if (spec.query_type == QueryType::inside) {
-        for (std::size_t i = 0; i < n; ++i) {
-          auto t0 = Clock::now();
-          s.take(method->inside(pts[i]));
-          lat[i] = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-        }
-      } else {
-        for (std::size_t i = 0; i < n; ++i) {
-          auto t0 = Clock::now();
-          s.take(method->distance(pts[i]));
-          lat[i] = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-        }
-      }
-      g_sink = s.acc;
-    }
+    std::vector<double> lat;
+    if (!batch) replay.latency_pass(&lat);
     qprog.finish();
     query_rss = std::max(query_rss, current_rss_bytes());
     std::size_t over = std::count_if(lat.begin(), lat.end(), [&](double v) { return v > spec.deadline_ns; });
-    double mean = n ? std::accumulate(lat.begin(), lat.end(), 0.0) / double(n) : 0.0;
+    double mean = total ? std::accumulate(lat.begin(), lat.end(), 0.0) / double(total) : 0.0;
     std::sort(lat.begin(), lat.end());
     json q;
-    q["n"] = n;
+    q["n"] = total;
     if (!qps.empty()) {
       q["throughput_qps"] = {{"median", median(qps)},
                              {"min", *std::min_element(qps.begin(), qps.end())},
@@ -341,6 +326,21 @@ json run_job(const JobSpec& spec) {
     q["deadline_ns"] = spec.deadline_ns;
     q["over_deadline"] = batch ? json(nullptr) : json(over);
     q["batch"] = batch;
+    json th;
+    th["count"] = spec.threads;
+    th["mode"] = probes ? "probes" : "split";
+    if (with_single && !single_qps.empty()) {
+      const double single_median = median(single_qps);
+      th["single_thread_qps"] = {{"median", single_median},
+                                 {"min", *std::min_element(single_qps.begin(), single_qps.end())},
+                                 {"max", *std::max_element(single_qps.begin(), single_qps.end())},
+                                 {"samples", single_qps}};
+      th["speedup"] = single_median > 0 && !qps.empty() ? json(median(qps) / single_median) : json(nullptr);
+    } else {
+      th["single_thread_qps"] = nullptr;
+      th["speedup"] = with_single ? json(nullptr) : json(1.0);
+    }
+    q["threads"] = th;
     r["queries"] = q;
 
     const std::size_t query_peak = peak_rss_bytes();

@@ -1,6 +1,7 @@
 // Reading a suite file: the YAML parsed, checked and expanded into its jobs (suite.hpp).
 #include "harness/run/suite.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -228,24 +229,43 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
         if (methods.size() > kMaxSuiteJobs)
           yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
       }
+    // The thread axis: query threads per job (default 1).
+    std::vector<int> thread_counts;
+    for (auto n : as_list(m["threads"] ? m["threads"] : YAML::Node(1))) {
+      int t = 0;
+      try {
+        t = n.as<int>();
+      } catch (const YAML::Exception&) {
+        yaml_error(path, n, "threads: is a thread count or a list of them");
+      }
+      if (t < 1 || t > kMaxJobThreads)
+        yaml_error(path, n, "threads must be between 1 and " + std::to_string(kMaxJobThreads));
+      if (std::find(thread_counts.begin(), thread_counts.end(), t) == thread_counts.end()) thread_counts.push_back(t);
+    }
+    if (thread_counts.empty()) yaml_error(path, m, "threads: is an empty list");
     // Before the product is made: its size, in floating point since it may not fit in 64 bits.
-    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size());
+    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size()) *
+                double(thread_counts.size());
     if (expanded > double(kMaxSuiteJobs))
       yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
                               " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
     for (auto& mesh : meshes)
       for (auto& q : queries)
         for (auto t : types)
-          for (auto& spec : methods) {
-            JobPlan j;
-            j.mesh = mesh;
-            j.queries = q;
-            j.query = t;
-            j.method = spec;
-            j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec.text);
-            if (j.id.size() > 200) j.id = j.id.substr(0, 180) + "-" + sha256_hex(j.id.data(), j.id.size()).substr(0, 12);
-            if (seen.insert(j.id).second) cfg.jobs.push_back(j);
-          }
+          for (auto& spec : methods)
+            for (int threads : thread_counts) {
+              JobPlan j;
+              j.mesh = mesh;
+              j.queries = q;
+              j.query = t;
+              j.method = spec;
+              j.threads = threads;
+              // One thread keeps the id it always had; more add "__t<T>".
+              j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec.text +
+                               (threads == 1 ? std::string() : "__t" + std::to_string(threads)));
+              if (j.id.size() > 200) j.id = j.id.substr(0, 180) + "-" + sha256_hex(j.id.data(), j.id.size()).substr(0, 12);
+              if (seen.insert(j.id).second) cfg.jobs.push_back(j);
+            }
   }
   return cfg;
 }

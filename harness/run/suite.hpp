@@ -37,7 +37,11 @@ struct JobPlan {
   QueryPlan queries;
   QueryType query = QueryType::inside;
   MethodSpec method;  ///< resolved when the suite was read
+  int threads = 1;    ///< query threads (the matrix's `threads:` axis; suites/README.md)
 };
+
+/// The most query threads a job may ask for (as `bvhbench run --threads`).
+inline constexpr int kMaxJobThreads = 1024;
 
 struct SuiteConfig {
   std::string name;

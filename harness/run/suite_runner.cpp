@@ -163,6 +163,7 @@ SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
     task.spec.method = j.method;
     task.spec.query_type = j.query;
     task.spec.repeat = cfg.repeat;
+    task.spec.threads = j.threads;
     const QuerySetFile qs = shared.queries(j);
     if (interrupted()) break;  // the query set was cut short: not this job's failure
     task.spec.queries_path = qs.path;

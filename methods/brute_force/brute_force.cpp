@@ -11,41 +11,40 @@
 
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 
 namespace bvhbench {
 namespace {
 
-class BruteForce final : public Method {
+/// The mesh, shared read-only by every thread's queries.
+struct Geometry {
+  double threshold;
+  std::vector<Vec3d> v;
+  std::vector<std::array<std::uint32_t, 3>> f;
+};
+
+/// One thread's queries: its triangles_tested counter. No path state.
+class BruteForceQueries final : public QueryState {
  public:
-  explicit BruteForce(const Params& p) : threshold_(p.get_real("winding_threshold")) {}
-
-  void build(const Mesh& mesh, const BuildContext&) override {
-    // No triangle, no closest point: an answer would be made up (the mesh readers refuse such a
-    // file first; this is for callers of the interface, as the other methods do).
-    if (mesh.triangles.empty()) throw InputError("brute_force: the mesh has no triangle");
-    v_ = mesh.vertices;
-    f_ = mesh.triangles;
-  }
-
-  bool supports(QueryType) const override { return true; }
+  explicit BruteForceQueries(const Geometry& g) : g_(g) {}
 
   double winding(const Vec3d& p) {
     double w = 0;
-    for (const auto& t : f_) w += triangle_winding(p, v_[t[0]], v_[t[1]], v_[t[2]]);
-    triangles_tested_ += f_.size();
+    for (const auto& t : g_.f) w += triangle_winding(p, g_.v[t[0]], g_.v[t[1]], g_.v[t[2]]);
+    triangles_tested_ += g_.f.size();
     return w;
   }
 
-  bool inside(const Vec3d& p) override { return winding(p) > threshold_; }
+  bool inside(const Vec3d& p) override { return winding(p) > g_.threshold; }
 
   DistanceResult distance(const Vec3d& p) override {
     double best = std::numeric_limits<double>::infinity();
     std::size_t best_i = 0;
     Vec3d best_q;
-    for (std::size_t i = 0; i < f_.size(); ++i) {
-      const auto& t = f_[i];
-      Vec3d q = closest_point_on_triangle(p, v_[t[0]], v_[t[1]], v_[t[2]]);
+    for (std::size_t i = 0; i < g_.f.size(); ++i) {
+      const auto& t = g_.f[i];
+      Vec3d q = closest_point_on_triangle(p, g_.v[t[0]], g_.v[t[1]], g_.v[t[2]]);
       double d2 = squared_norm(q - p);
       if (d2 < best) {
         best = d2;
@@ -53,28 +52,47 @@ class BruteForce final : public Method {
         best_q = q;
       }
     }
-    triangles_tested_ += f_.size();
+    triangles_tested_ += g_.f.size();
     DistanceResult r;
-    const auto& t = f_[best_i];
+    const auto& t = g_.f[best_i];
     r.closest = best_q;
     r.triangle = std::int64_t(best_i);
-    r.normal = triangle_normal(v_[t[0]], v_[t[1]], v_[t[2]]);
+    r.normal = triangle_normal(g_.v[t[0]], g_.v[t[1]], g_.v[t[2]]);
     const double d = std::sqrt(best);
-    r.distance = winding(p) > threshold_ ? -d : d;
+    r.distance = winding(p) > g_.threshold ? -d : d;
     return r;
   }
 
-  std::size_t structure_bytes() const override {
-    return v_.capacity() * sizeof(Vec3d) + f_.capacity() * sizeof(f_[0]);
-  }
   std::vector<Counter> counters() const override { return {{"triangles_tested", triangles_tested_}}; }
   void reset_counters() override { triangles_tested_ = 0; }
 
  private:
-  double threshold_;
-  std::vector<Vec3d> v_;
-  std::vector<std::array<std::uint32_t, 3>> f_;
+  const Geometry& g_;
   std::uint64_t triangles_tested_ = 0;
+};
+
+class BruteForce final : public SharedStructureMethod<BruteForceQueries> {
+ public:
+  explicit BruteForce(const Params& p) { g_.threshold = p.get_real("winding_threshold"); }
+
+  void build(const Mesh& mesh, const BuildContext&) override {
+    // No triangle, no closest point: an answer would be made up (the mesh readers refuse such a
+    // file first; this is for callers of the interface, as the other methods do).
+    if (mesh.triangles.empty()) throw InputError("brute_force: the mesh has no triangle");
+    g_.v = mesh.vertices;
+    g_.f = mesh.triangles;
+    start_queries();
+  }
+
+  bool supports(QueryType) const override { return true; }
+
+  std::size_t structure_bytes() const override {
+    return g_.v.capacity() * sizeof(Vec3d) + g_.f.capacity() * sizeof(g_.f[0]);
+  }
+
+ private:
+  std::unique_ptr<BruteForceQueries> make_state() const override { return std::make_unique<BruteForceQueries>(g_); }
+  Geometry g_;
 };
 
 }  // namespace
@@ -86,6 +104,7 @@ void bvhbench_register_brute_force(bvhbench::Registry& r) {
   m.name = "brute_force";
   m.description = "Exact reference: every triangle per query, double precision; inside by the generalized winding number";
   m.caps = {true, true, true, false, false};
+  m.caps.concurrent_queries = true;  // per-thread counters over the shared mesh
   m.machine_dependent_counters = {};  // none: our own loop over every triangle, no library
   m.params = {{"winding_threshold", ParamType::real, "0.5",
                "inside iff the generalized winding number exceeds this", {}, 0.0, 1.0}};

@@ -25,8 +25,10 @@
 //    point is the segment or point they collapse to), but the ray test skips them: CGAL's
 //    ray-triangle predicate has the precondition "triangle not degenerate" (an assertion in
 //    debug builds), and a zero-area triangle cannot change a ray's parity anyway.
-//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially and answers one query at
-//    a time; `threads` is accepted for uniform sweeps and recorded, it changes nothing.
+//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially; `threads` is accepted for
+//    uniform sweeps and recorded, it changes nothing there. Queries run on the job's threads: both
+//    trees are const once built (built here, never lazily by a query), traversals are const, and
+//    each thread's query state keeps its own hint and counters (CgalQueries).
 #include <CGAL/AABB_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -49,6 +51,7 @@
 #include "harness/core/mesh.hpp"
 #include "harness/core/method_support.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/process_memory.hpp"
 
@@ -66,8 +69,13 @@ typename K::Point_3 to_point(const Vec3f& v) {
   return typename K::Point_3(double(v.x), double(v.y), double(v.z));
 }
 
+/// Triangles fetched by the tree on this thread (TriangleMap). The map is one object inside the
+/// tree, shared by every thread's queries, so it counts into the calling thread's counter, and a
+/// query state takes the difference across each query: its own count, whatever other threads do.
+thread_local std::uint64_t t_triangles_fetched = 0;
+
 /// Triangle index -> K::Triangle_3, built on the fly from the shared geometry. Each call is one
-/// triangle the library is about to test, so the map also counts them (after build()).
+/// triangle the library is about to test, so the map also counts them (t_triangles_fetched).
 template <class K>
 struct TriangleMap {
   using key_type = std::uint32_t;
@@ -75,10 +83,9 @@ struct TriangleMap {
   using reference = value_type;
   using category = boost::readable_property_map_tag;
   const Geometry* g = nullptr;
-  std::uint64_t* fetched = nullptr;
 
   friend value_type get(const TriangleMap& m, key_type i) {
-    ++*m.fetched;
+    ++t_triangles_fetched;
     const auto& t = m.g->triangles[i];
     return value_type(to_point<K>(m.g->vertices[t[0]]), to_point<K>(m.g->vertices[t[1]]),
                       to_point<K>(m.g->vertices[t[2]]));
@@ -159,8 +166,10 @@ struct Options {
   int threads = 1;
 };
 
+/// The built structure, shared read-only by every thread's queries (CGAL's AABB_tree and its
+/// KD-tree are const once built: both are built in build(), never lazily by a query).
 template <class K>
-class CgalAabb final : public Method {
+struct CgalStructure {
   using Point = typename K::Point_3;
   using Primitive = CGAL::AABB_primitive<std::uint32_t, TriangleMap<K>, ReferencePointMap<K>,
                                          CGAL::Tag_true /*external maps*/, CGAL::Tag_false /*no cached datum*/>;
@@ -171,12 +180,122 @@ class CgalAabb final : public Method {
   /// Random rays tried after the vertical one while the parity is undecided (a degenerate hit).
   static constexpr int kMaxRandomRays = 16;
 
+  Options opt;
+  Geometry geo;
+  std::vector<bool> degenerate;
+  std::size_t degenerate_count = 0;
+  Tree tree;
+  CGAL::Bbox_3 bbox;
+  bool kd_built = false;
+  std::size_t kd_bytes = 0;
+  std::array<typename K::Vector_3, kMaxRandomRays> directions;
+};
+
+/// One thread's queries: the coherent hint and the counters.
+template <class K>
+class CgalQueries final : public QueryState {
+  using S = CgalStructure<K>;
+  using Point = typename S::Point;
+  using Tree = typename S::Tree;
+  using Traits = typename S::Traits;
+  using Hint = typename S::Hint;
+
  public:
-  explicit CgalAabb(const Options& o) : opt_(o) {
+  explicit CgalQueries(const S& s) : s_(s) {}
+
+  void reset_path() override { has_prev_ = false; }
+
+  bool inside(const Vec3d& p) override {
+    const std::uint64_t fetched0 = t_triangles_fetched;
+    const bool r = inside_impl(Point(p.x, p.y, p.z));
+    datum_fetches_ += t_triangles_fetched - fetched0;
+    return r;
+  }
+
+  DistanceResult distance(const Vec3d& p) override {
+    const std::uint64_t fetched0 = t_triangles_fetched;
+    const Point q(p.x, p.y, p.z);
+    const Hint hint = (s_.opt.coherent && has_prev_) ? prev_ : s_.tree.best_hint(q);
+    CountingProjectionTraits<Traits> traits(hint.first, hint.second, s_.tree.traits(), &nodes_visited_);
+    s_.tree.traversal(q, traits);
+    const Hint best = traits.closest_point_and_primitive();
+    if (s_.opt.coherent) {
+      prev_ = best;
+      has_prev_ = true;
+    }
+
+    DistanceResult r;
+    r.closest = Vec3d(CGAL::to_double(best.first.x()), CGAL::to_double(best.first.y()),
+                      CGAL::to_double(best.first.z()));
+    r.triangle = std::int64_t(best.second);
+    r.normal = face_normal(s_.geo.vertices, s_.geo.triangles[best.second]);
+    const double d = norm(r.closest - p);
+    // On the surface the sign is moot, and a ray from there is degenerate by construction.
+    r.distance = (d > 0 && inside_impl(q)) ? -d : d;
+    datum_fetches_ += t_triangles_fetched - fetched0;
+    return r;
+  }
+
+  std::vector<Counter> counters() const override {
+    return {{"triangles_tested", datum_fetches_},
+            {"nodes_visited", nodes_visited_},
+            {"rays_shot", rays_shot_},
+            {"undecided", undecided_}};
+  }
+  void reset_counters() override { datum_fetches_ = nodes_visited_ = rays_shot_ = undecided_ = 0; }
+
+ private:
+  bool inside_impl(const Point& p) {
+    const CGAL::Bbox_3& bbox = s_.bbox;
+    // As Side_of_triangle_mesh: outside the box is outside (no ray needed).
+    if (p.x() < bbox.xmin() || p.x() > bbox.xmax() || p.y() < bbox.ymin() ||
+        p.y() > bbox.ymax() || p.z() < bbox.zmin() || p.z() > bbox.zmax())
+      return false;
+
+    // Vertical ray first, towards the nearer side of the box (fewer boxes crossed).
+    const double dz = 2 * CGAL::to_double(p.z()) < bbox.zmin() + bbox.zmax() ? -1.0 : 1.0;
+    std::pair<boost::logic::tribool, std::size_t> status(boost::logic::indeterminate, 0);
+    {
+      ++rays_shot_;
+      typename K::Ray_3 ray(p, typename K::Vector_3(0, 0, dz));
+      RayParityTraits<Tree, K, CGAL::Tag_true> traits(status, s_.tree, s_.degenerate, &nodes_visited_);
+      s_.tree.traversal(ray, traits);
+    }
+    for (int i = 0; i < S::kMaxRandomRays && boost::logic::indeterminate(status.first); ++i) {
+      ++rays_shot_;
+      status = {boost::logic::indeterminate, 0};
+      typename K::Ray_3 ray(p, s_.directions[std::size_t(i)]);
+      RayParityTraits<Tree, K, CGAL::Tag_false> traits(status, s_.tree, s_.degenerate, &nodes_visited_);
+      s_.tree.traversal(ray, traits);
+    }
+    if (boost::logic::indeterminate(status.first)) {
+      ++undecided_;  // every ray grazed an edge: the point is (almost) on the surface
+      return (status.second & 1) == 1;
+    }
+    if (!status.first) return true;  // the point lies on a triangle: boundary counts as inside
+    return (status.second & 1) == 1;
+  }
+
+  const S& s_;
+  bool has_prev_ = false;
+  Hint prev_;
+  std::uint64_t datum_fetches_ = 0, nodes_visited_ = 0, rays_shot_ = 0, undecided_ = 0;
+};
+
+template <class K>
+class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
+  using S = CgalStructure<K>;
+  using Point = typename S::Point;
+  using Primitive = typename S::Primitive;
+  using Traits = typename S::Traits;
+
+ public:
+  explicit CgalAabb(const Options& o) {
+    s_.opt = o;
     // Fixed directions, so that counters are deterministic and independent of query order.
     std::mt19937_64 rng(1340818006);  // CGAL's own seed for Point_inside_vertical_ray_cast
     std::normal_distribution<double> n01;
-    for (auto& d : directions_) {
+    for (auto& d : s_.directions) {
       double x, y, z, l;
       do {
         x = n01(rng), y = n01(rng), z = n01(rng);
@@ -189,160 +308,83 @@ class CgalAabb final : public Method {
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     if (mesh.triangles.empty()) throw InputError("cgal_aabb: the mesh has no triangle");
     try {
-      geo_.vertices = float32_vertices(mesh.vertices);
-      geo_.triangles = mesh.triangles;
-      geo_.triangles.shrink_to_fit();
+      s_.geo.vertices = float32_vertices(mesh.vertices);
+      s_.geo.triangles = mesh.triangles;
+      s_.geo.triangles.shrink_to_fit();
 
-      const std::size_t nt = geo_.triangles.size();
-      degenerate_.assign(nt, false);
+      const std::size_t nt = s_.geo.triangles.size();
+      s_.degenerate.assign(nt, false);
       typename K::Collinear_3 collinear = K().collinear_3_object();
       for (std::size_t i = 0; i < nt; ++i) {
-        const auto& t = geo_.triangles[i];
-        if (collinear(to_point<K>(geo_.vertices[t[0]]), to_point<K>(geo_.vertices[t[1]]),
-                      to_point<K>(geo_.vertices[t[2]]))) {
-          degenerate_[i] = true;
-          ++degenerate_count_;
+        const auto& t = s_.geo.triangles[i];
+        if (collinear(to_point<K>(s_.geo.vertices[t[0]]), to_point<K>(s_.geo.vertices[t[1]]),
+                      to_point<K>(s_.geo.vertices[t[2]]))) {
+          s_.degenerate[i] = true;
+          ++s_.degenerate_count;
         }
       }
 
-      TriangleMap<K> tmap{&geo_, &datum_fetches_};
-      ReferencePointMap<K> pmap{&geo_};
-      tree_.insert(boost::counting_iterator<std::uint32_t>(0),
-                   boost::counting_iterator<std::uint32_t>(std::uint32_t(nt)), tmap, pmap);
-      tree_.build();
-      bbox_ = tree_.bbox();
+      TriangleMap<K> tmap{&s_.geo};
+      ReferencePointMap<K> pmap{&s_.geo};
+      s_.tree.insert(boost::counting_iterator<std::uint32_t>(0),
+                     boost::counting_iterator<std::uint32_t>(std::uint32_t(nt)), tmap, pmap);
+      s_.tree.build();
+      s_.bbox = s_.tree.bbox();
 
       // The KD-tree only serves distance queries: build it now (not lazily on the first query,
       // which would hide its cost in the query timings), and only when distances will be asked.
-      kd_built_ = opt_.kd_tree && ctx.query_type == QueryType::distance;
-      if (kd_built_) {
+      s_.kd_built = s_.opt.kd_tree && ctx.query_type == QueryType::distance;
+      if (s_.kd_built) {
         const std::size_t rss0 = current_rss_bytes();
-        tree_.accelerate_distance_queries();
+        s_.tree.accelerate_distance_queries();
         const std::size_t rss1 = current_rss_bytes();
         // The KD-tree (AABB_search_tree over a CGAL Kd_tree) keeps a copy of one decorated point
         // per primitive (Point_3 + id + flag, 32 bytes) and a pointer to it, plus its nodes. Its
         // node storage is private, so we measure the RSS growth around its construction and
         // keep the larger of that and the lower bound from the points alone.
         const std::size_t lower = nt * (sizeof(Point) + 8 + sizeof(void*));
-        kd_bytes_ = std::max(lower, rss1 > rss0 ? rss1 - rss0 : std::size_t(0));
+        s_.kd_bytes = std::max(lower, rss1 > rss0 ? rss1 - rss0 : std::size_t(0));
       } else {
-        tree_.do_not_accelerate_distance_queries();
+        s_.tree.do_not_accelerate_distance_queries();
       }
     } catch (const CGAL::Failure_exception& e) {
       throw std::runtime_error(std::string("cgal_aabb: CGAL failure during build: ") + e.what());
     }
-    datum_fetches_ = 0;  // the build fetched every triangle for its boxes: not query work
+    this->start_queries();
   }
 
   bool supports(QueryType) const override { return true; }
 
-  void reset_path() override { has_prev_ = false; }
-
-  bool inside(const Vec3d& p) override { return inside_impl(Point(p.x, p.y, p.z)); }
-
-  DistanceResult distance(const Vec3d& p) override {
-    const Point q(p.x, p.y, p.z);
-    const Hint hint = (opt_.coherent && has_prev_) ? prev_ : tree_.best_hint(q);
-    CountingProjectionTraits<Traits> traits(hint.first, hint.second, tree_.traits(), &nodes_visited_);
-    tree_.traversal(q, traits);
-    const Hint best = traits.closest_point_and_primitive();
-    if (opt_.coherent) {
-      prev_ = best;
-      has_prev_ = true;
-    }
-
-    DistanceResult r;
-    r.closest = Vec3d(CGAL::to_double(best.first.x()), CGAL::to_double(best.first.y()),
-                      CGAL::to_double(best.first.z()));
-    r.triangle = std::int64_t(best.second);
-    r.normal = face_normal(geo_.vertices, geo_.triangles[best.second]);
-    const double d = norm(r.closest - p);
-    // On the surface the sign is moot, and a ray from there is degenerate by construction.
-    r.distance = (d > 0 && inside_impl(q)) ? -d : d;
-    return r;
-  }
-
   std::size_t structure_bytes() const override {
-    return geometry_bytes() + tree_bytes() + kd_bytes_;
-  }
-
-  std::vector<Counter> counters() const override {
-    return {{"triangles_tested", datum_fetches_},
-            {"nodes_visited", nodes_visited_},
-            {"rays_shot", rays_shot_},
-            {"undecided", undecided_}};
-  }
-  void reset_counters() override {
-    datum_fetches_ = nodes_visited_ = rays_shot_ = undecided_ = 0;
+    return geometry_bytes() + tree_bytes() + s_.kd_bytes;
   }
 
   nlohmann::json info() const override {
-    return {{"kernel", opt_.kernel},
-            {"triangles", geo_.triangles.size()},
-            {"degenerate_triangles", degenerate_count_},
-            {"tree_nodes", tree_.size() > 1 ? tree_.size() - 1 : 0},
+    return {{"kernel", s_.opt.kernel},
+            {"triangles", s_.geo.triangles.size()},
+            {"degenerate_triangles", s_.degenerate_count},
+            {"tree_nodes", s_.tree.size() > 1 ? s_.tree.size() - 1 : 0},
             {"node_bytes", sizeof(CGAL::AABB_node<Traits>)},
             {"primitive_bytes", sizeof(Primitive)},
-            {"kd_tree_built", kd_built_},
-            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", kd_bytes_}}},
+            {"kd_tree_built", s_.kd_built},
+            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", s_.kd_bytes}}},
             {"threads_effective", 1}};
   }
 
  private:
+  std::unique_ptr<CgalQueries<K>> make_state() const override { return std::make_unique<CgalQueries<K>>(s_); }
+
   std::size_t geometry_bytes() const {
-    return geo_.vertices.capacity() * sizeof(Vec3f) +
-           geo_.triangles.capacity() * sizeof(geo_.triangles[0]) + (degenerate_.capacity() + 7) / 8;
+    return s_.geo.vertices.capacity() * sizeof(Vec3f) +
+           s_.geo.triangles.capacity() * sizeof(s_.geo.triangles[0]) + (s_.degenerate.capacity() + 7) / 8;
   }
   /// Exact: the tree reserves #F-1 nodes and keeps one Primitive (its id) per triangle.
   std::size_t tree_bytes() const {
-    const std::size_t n = tree_.size();
+    const std::size_t n = s_.tree.size();
     return (n > 1 ? n - 1 : 0) * sizeof(CGAL::AABB_node<Traits>) + n * sizeof(Primitive);
   }
 
-  bool inside_impl(const Point& p) {
-    // As Side_of_triangle_mesh: outside the box is outside (no ray needed).
-    if (p.x() < bbox_.xmin() || p.x() > bbox_.xmax() || p.y() < bbox_.ymin() ||
-        p.y() > bbox_.ymax() || p.z() < bbox_.zmin() || p.z() > bbox_.zmax())
-      return false;
-
-    // Vertical ray first, towards the nearer side of the box (fewer boxes crossed).
-    const double dz = 2 * CGAL::to_double(p.z()) < bbox_.zmin() + bbox_.zmax() ? -1.0 : 1.0;
-    std::pair<boost::logic::tribool, std::size_t> status(boost::logic::indeterminate, 0);
-    {
-      ++rays_shot_;
-      typename K::Ray_3 ray(p, typename K::Vector_3(0, 0, dz));
-      RayParityTraits<Tree, K, CGAL::Tag_true> traits(status, tree_, degenerate_, &nodes_visited_);
-      tree_.traversal(ray, traits);
-    }
-    for (int i = 0; i < kMaxRandomRays && boost::logic::indeterminate(status.first); ++i) {
-      ++rays_shot_;
-      status = {boost::logic::indeterminate, 0};
-      typename K::Ray_3 ray(p, directions_[std::size_t(i)]);
-      RayParityTraits<Tree, K, CGAL::Tag_false> traits(status, tree_, degenerate_, &nodes_visited_);
-      tree_.traversal(ray, traits);
-    }
-    if (boost::logic::indeterminate(status.first)) {
-      ++undecided_;  // every ray grazed an edge: the point is (almost) on the surface
-      return (status.second & 1) == 1;
-    }
-    if (!status.first) return true;  // the point lies on a triangle: boundary counts as inside
-    return (status.second & 1) == 1;
-  }
-
-  Options opt_;
-  Geometry geo_;
-  std::vector<bool> degenerate_;
-  std::size_t degenerate_count_ = 0;
-  Tree tree_;
-  CGAL::Bbox_3 bbox_;
-  bool kd_built_ = false;
-  std::size_t kd_bytes_ = 0;
-  std::array<typename K::Vector_3, kMaxRandomRays> directions_;
-
-  bool has_prev_ = false;
-  Hint prev_;
-
-  std::uint64_t datum_fetches_ = 0, nodes_visited_ = 0, rays_shot_ = 0, undecided_ = 0;
+  S s_;
 };
 
 }  // namespace
@@ -357,6 +399,7 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
       "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
       "Side_of_triangle_mesh's ray parity on the same tree";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  m.caps.concurrent_queries = true;  // per-thread hint and counters over the const trees
   // None: CGAL is header-only and compiled here with our flags, with no run-time CPU dispatch;
   // the traversal and its filtered predicates run in plain double (interval filters under our
   // rounding mode) and fall back to GMP (Debian's is not a "fat" build, and an exact fallback

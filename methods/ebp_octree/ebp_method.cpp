@@ -16,6 +16,7 @@
 
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/progress.hpp"
 #include "methods/ebp_octree/commands.hpp"
@@ -133,51 +134,54 @@ nlohmann::json stats_json(const ebp::Octree& t) {
 
 namespace {
 
-class EbpOctreeMethod final : public Method {
+/// One thread's queries: an ebp::Query (its stamps, path state and counters) over the shared tree.
+class EbpQueries final : public QueryState {
+ public:
+  EbpQueries(const ebp::Octree& tree, bool coherent, bool certificate, bool chained_sign)
+      : tree_(tree), query_(tree, coherent) {
+    query_.set_certificate(certificate);
+    query_.set_chained_sign(chained_sign);
+  }
+  // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
+  bool inside(const Vec3d& p) override { return query_.inside(tree_.to_frame(p)); }
+  DistanceResult distance(const Vec3d& p) override {
+    DistanceResult r = to_distance_result(query_.distance(tree_.to_frame(p)));
+    r.closest = tree_.to_world(r.closest);
+    return r;
+  }
+  void reset_path() override { query_.reset_path(); }
+  std::vector<Counter> counters() const override { return ebp_counters(query_.counters); }
+  void reset_counters() override { query_.counters = {}; }
+
+ private:
+  const ebp::Octree& tree_;
+  ebp::Query query_;
+};
+
+class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
  public:
   explicit EbpOctreeMethod(const Params& p) : params_(p), coherent_(p.get_bool("coherent")) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     tree_ = build_tree(mesh, build_params(params_, ctx.threads), ctx.progress);
-    query_.emplace(tree_, coherent_);
-    query_->set_certificate(params_.get_bool("certificate"));
-    query_->set_chained_sign(params_.get_bool("chained_sign"));
+    start_queries();
   }
   bool supports(QueryType) const override { return true; }
-  // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
-  bool inside(const Vec3d& p) override { return query_->inside(tree_.to_frame(p)); }
-  DistanceResult distance(const Vec3d& p) override {
-    DistanceResult r = to_distance_result(query_->distance(tree_.to_frame(p)));
-    r.closest = tree_.to_world(r.closest);
-    return r;
-  }
-  void reset_path() override {
-    if (query_) query_->reset_path();
-  }
+  /// The tree and one query's stamps (every further thread's query state holds as many again).
   std::size_t structure_bytes() const override {
     return tree_.bytes() + tree_.derived_bytes() +
-           (query_ ? (std::size_t(tree_.num_triangles) + tree_.leaves.size()) * sizeof(std::uint32_t) : 0);
-  }
-  std::vector<Counter> counters() const override {
-    if (!query_) return {};
-    const ebp::QueryCounters& c = query_->counters;
-    return {{"nodes_visited", c.nodes_visited}, {"planes_tested", c.planes_tested},
-            {"triangles_tested", c.triangles_tested}, {"hit_white", c.hit_white},
-            {"hit_black", c.hit_black}, {"hit_convex", c.hit_convex},
-            {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
-            {"exact_fallbacks", c.exact_fallbacks}, {"certificate_renewals", c.certificate_renewals},
-            {"certificate_served", c.certificate_served}, {"signs_chained", c.signs_chained}};
-  }
-  void reset_counters() override {
-    if (query_) query_->counters = {};
+           (own_state() ? (std::size_t(tree_.num_triangles) + tree_.leaves.size()) * sizeof(std::uint32_t) : 0);
   }
   nlohmann::json info() const override { return stats_json(tree_); }
 
  private:
+  std::unique_ptr<EbpQueries> make_state() const override {
+    return std::make_unique<EbpQueries>(tree_, coherent_, params_.get_bool("certificate"),
+                                        params_.get_bool("chained_sign"));
+  }
   Params params_;
   bool coherent_;
   ebp::Octree tree_;
-  std::optional<ebp::Query> query_;
 };
 
 }  // namespace
@@ -191,6 +195,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
       "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
       "winding-number crossings, branch-and-bound distance";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, /*out_of_core*/ true};
+  // In memory one ebp::Query per thread over the const tree; out of core one page cache per thread
+  // over the shared store reader (ooc_method.cpp says why).
+  m.caps.concurrent_queries = true;
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
   m.create = [](const Params& p) -> std::unique_ptr<Method> {

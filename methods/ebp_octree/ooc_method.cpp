@@ -2,12 +2,14 @@
 // with the check that the store was built from the mesh the job names.
 #include "methods/ebp_octree/ooc_method.hpp"
 
-#include <optional>
+#include <algorithm>
+#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "harness/core/mesh.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 #include "methods/ebp_octree/ebp_adapter.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
@@ -15,7 +17,42 @@
 namespace bvhbench {
 namespace {
 
-class EbpOocMethod final : public Method {
+/// One thread's queries: an ebp::OutOfCore with a page cache of its own over the shared store.
+///
+/// Why a cache per thread and not one shared: a cache entry holds its page's ebp::Query, whose
+/// stamps and path state one query writes as it goes, so a shared entry could serve one thread at
+/// a time only (a lock per page, held for a whole page search); and a shared cache's hits,
+/// misses and evictions would depend on how the threads interleave, so its counters would not be
+/// deterministic. Per thread, each cache sees only its own thread's queries: the counters depend
+/// on the input and T alone, and no lock is taken on the query path. The cost: a page several
+/// threads need is read and decoded once per thread, and the job's cache_mb is split evenly
+/// between the T caches, so that the budget still bounds the job's memory.
+class EbpOocQueries final : public QueryState {
+ public:
+  EbpOocQueries(std::shared_ptr<const ebp::StoreReader> store, std::size_t cache_bytes, bool coherent, bool cold,
+                bool certificate, bool chained_sign)
+      : ooc_(std::move(store), cache_bytes, coherent, cold) {
+    ooc_.set_certificate(certificate);
+    ooc_.set_chained_sign(chained_sign);
+  }
+  bool inside(const Vec3d& p) override { return ooc_.inside(p); }
+  DistanceResult distance(const Vec3d& p) override { return to_distance_result(ooc_.distance(p)); }
+  void reset_path() override { ooc_.reset_path(); }
+  std::vector<Counter> counters() const override {
+    std::vector<Counter> c = ebp_counters(ooc_.counters());
+    const ebp::PageCache& k = ooc_.cache();
+    c.insert(c.end(), {{"cache_hits", k.hits}, {"cache_misses", k.misses}, {"bytes_read", k.bytes_read},
+                       {"cache_evictions", k.evictions}});
+    return c;
+  }
+  void reset_counters() override { ooc_.reset_counters(); }
+  const ebp::OutOfCore& ooc() const { return ooc_; }
+
+ private:
+  ebp::OutOfCore ooc_;
+};
+
+class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
  public:
   explicit EbpOocMethod(const Params& p)
       : path_(p.get("store")),
@@ -25,45 +62,27 @@ class EbpOocMethod final : public Method {
         certificate_(p.get_bool("certificate")),
         chained_sign_(p.get_bool("chained_sign")) {}
 
-  void build(const Mesh& mesh, const BuildContext&) override {
-    ooc_.emplace(path_, cache_bytes_, coherent_, cold_);
-    ooc_->set_certificate(certificate_);
-    ooc_->set_chained_sign(chained_sign_);
-    const ebp::FileHeader& h = ooc_->store().header();
+  void build(const Mesh& mesh, const BuildContext& ctx) override {
+    thread_cache_bytes_ = cache_bytes_ / std::size_t(std::max(1, ctx.threads));
+    store_ = std::make_shared<const ebp::StoreReader>(path_);
+    const ebp::FileHeader& h = store_->header();
     if (!mesh.triangles.empty() && h.num_triangles != mesh.num_triangles())
       throw file_error(path_, "built for a mesh of " + std::to_string(h.num_triangles) + " triangles, " + mesh.path +
                                   " has " + std::to_string(mesh.num_triangles()));
-    const auto info = nlohmann::json::parse(ooc_->store().info_json(), nullptr, false);
+    const auto info = nlohmann::json::parse(store_->info_json(), nullptr, false);
     if (info.is_object() && info.contains("mesh_sha256") && info["mesh_sha256"].is_string() && !mesh.sha256.empty() &&
         info["mesh_sha256"].get<std::string>() != mesh.sha256)
       throw file_error(path_, "built from another mesh (sha256 differs from " + mesh.path + ")");
+    start_queries();
   }
   bool supports(QueryType) const override { return true; }
-  bool inside(const Vec3d& p) override { return ooc_->inside(p); }
-  DistanceResult distance(const Vec3d& p) override { return to_distance_result(ooc_->distance(p)); }
-  void reset_path() override {
-    if (ooc_) ooc_->reset_path();
-  }
-  std::size_t structure_bytes() const override { return ooc_ ? ooc_->bytes() : 0; }
-  std::vector<Counter> counters() const override {
-    if (!ooc_) return {};
-    const ebp::QueryCounters c = ooc_->counters();
-    const ebp::PageCache& k = ooc_->cache();
-    return {{"nodes_visited", c.nodes_visited}, {"planes_tested", c.planes_tested},
-            {"triangles_tested", c.triangles_tested}, {"hit_white", c.hit_white},
-            {"hit_black", c.hit_black}, {"hit_convex", c.hit_convex},
-            {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
-            {"exact_fallbacks", c.exact_fallbacks}, {"certificate_renewals", c.certificate_renewals},
-            {"certificate_served", c.certificate_served}, {"signs_chained", c.signs_chained}, {"cache_hits", k.hits},
-            {"cache_misses", k.misses}, {"bytes_read", k.bytes_read},
-            {"cache_evictions", k.evictions}};
-  }
-  void reset_counters() override {
-    if (ooc_) ooc_->reset_counters();
-  }
+  /// The pinned store and the method's own thread's cache (every further thread's cache may hold
+  /// as much again, within its share of the budget).
+  std::size_t structure_bytes() const override { return own_state() ? own_state()->ooc().bytes() : 0; }
   nlohmann::json info() const override {
-    if (!ooc_) return nlohmann::json::object();
-    const ebp::FileHeader& h = ooc_->store().header();
+    if (!own_state()) return nlohmann::json::object();
+    const ebp::OutOfCore& ooc = own_state()->ooc();
+    const ebp::FileHeader& h = store_->header();
     nlohmann::json j;
     j["store"] = path_;
     j["store_bytes"] = h.file_size;
@@ -73,16 +92,21 @@ class EbpOocMethod final : public Method {
     j["nodes"] = h.nodes;
     j["triangle_refs"] = h.triangle_refs;
     j["cache_budget_bytes"] = cache_bytes_;
-    j["pinned_bytes"] = ooc_->store().pinned_bytes() + ooc_->cache().bookkeeping_bytes();
+    j["cache_budget_bytes_per_thread"] = thread_cache_bytes_;  // one page cache per query thread
+    j["pinned_bytes"] = store_->pinned_bytes() + ooc.cache().bookkeeping_bytes();
     j["cold"] = cold_;
     return j;
   }
 
  private:
+  std::unique_ptr<EbpOocQueries> make_state() const override {
+    return std::make_unique<EbpOocQueries>(store_, thread_cache_bytes_, coherent_, cold_, certificate_,
+                                           chained_sign_);
+  }
   std::string path_;
-  std::size_t cache_bytes_;
+  std::size_t cache_bytes_, thread_cache_bytes_ = 0;
   bool cold_, coherent_, certificate_, chained_sign_;
-  std::optional<ebp::OutOfCore> ooc_;
+  std::shared_ptr<const ebp::StoreReader> store_;
 };
 
 }  // namespace

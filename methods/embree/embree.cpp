@@ -33,9 +33,11 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -45,6 +47,7 @@
 #include "harness/core/mesh.hpp"
 #include "harness/core/method_support.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/process_memory.hpp"
 
@@ -137,117 +140,91 @@ const char* error_name(RTCError e) {
   return "error";
 }
 
-class Embree final : public Method {
- public:
-  explicit Embree(const Options& o) : opt_(o) {
-    std::mt19937_64 rng(0x5eedbeefULL);
-    std::normal_distribution<double> n01;
-    for (auto& d : directions_) {
-      Vec3d v;
-      do v = Vec3d(n01(rng), n01(rng), n01(rng));
-      while (norm(v) < 1e-3);
-      d = Vec3f(normalized(v));
+/// The built scene and what queries read, shared read-only by every thread's queries (Embree's
+/// rtcIntersect1 and rtcPointQuery on a committed scene may be called from any thread at once).
+struct EmbreeStructure {
+  Options opt;
+  std::vector<Vec3f> vertices;                         // #V + 1 (padding), float32
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // #F
+  Box3d bounds;
+  double magnitude = 0;  // largest |coordinate| of the mesh
+  std::size_t degenerate_count = 0;
+  std::array<Vec3f, kDirections> directions;
+
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::size_t bvh_bytes = 0;
+  // What the device error callback recorded, from whichever thread Embree called it on.
+  std::atomic<bool> failed{false};
+  std::mutex error_mutex;
+  std::string error;  // guarded by error_mutex
+
+  static void on_error(void* self, RTCError code, const char* str) {
+    auto* s = static_cast<EmbreeStructure*>(self);
+    std::lock_guard<std::mutex> lock(s->error_mutex);
+    s->failed = true;
+    if (s->error.empty()) s->error = std::string(error_name(code)) + (str ? std::string(": ") + str : "");
+  }
+
+  /// Turns a recorded device error into an exception at the method boundary.
+  void check(const char* where) {
+    const RTCError e = rtcGetDeviceError(device);
+    if (e == RTC_ERROR_NONE && !failed) return;
+    std::string msg;
+    {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      msg = error.empty() ? error_name(e) : error;
     }
+    throw std::runtime_error(std::string("embree: ") + where + ": " + msg);
   }
+};
 
-  ~Embree() override {
-    if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
-  }
-
-  void build(const Mesh& mesh, const BuildContext&) override {
-    if (mesh.triangles.empty()) throw InputError("embree: the mesh has no triangle");
-    if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
-      throw InputError("embree: more triangles than 32-bit primitive ids can address");
-
-    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-    vertices_ = float32_vertices(mesh.vertices, 1);  // + 1: Embree reads the last vertex with a 16-byte load
-    for (std::size_t i = 0; i < nv; ++i) bounds_.add(Vec3d(vertices_[i]));
-    triangles_.assign(mesh.triangles.begin(), mesh.triangles.end());
-    for (const auto& t : triangles_)
-      if (squared_norm(cross(Vec3d(vertices_[t[1]]) - Vec3d(vertices_[t[0]]),
-                             Vec3d(vertices_[t[2]]) - Vec3d(vertices_[t[0]]))) == 0)
-        ++degenerate_count_;
-    const Vec3d far = vmax(vmax(bounds_.lo, -bounds_.lo), vmax(bounds_.hi, -bounds_.hi));
-    magnitude_ = std::max({far.x, far.y, far.z});
-
-    const std::string config = "threads=" + std::to_string(opt_.threads) + ",verbose=0";
-    device_ = rtcNewDevice(config.c_str());
-    if (!device_)
-      throw std::runtime_error(std::string("embree: rtcNewDevice(\"") + config +
-                               "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
-    rtcSetDeviceErrorFunction(device_, &Embree::on_error, this);
-
-    const RTCBuildQuality quality = opt_.quality == "low"    ? RTC_BUILD_QUALITY_LOW
-                                    : opt_.quality == "high" ? RTC_BUILD_QUALITY_HIGH
-                                                             : RTC_BUILD_QUALITY_MEDIUM;
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneFlags(scene_, opt_.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-    rtcSetSceneBuildQuality(scene_, quality);
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, quality);
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(),
-                               0, sizeof(Vec3f), nv);
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, triangles_.data(),
-                               0, sizeof(triangles_[0]), nt);
-    rtcSetGeometryIntersectFilterFunction(geom, &all_hits_filter);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene_, geom);
-    rtcReleaseGeometry(geom);
-    check("building the scene");
-
-    const std::size_t rss0 = current_rss_bytes();
-    rtcCommitScene(scene_);
-    const std::size_t rss1 = current_rss_bytes();
-    check("rtcCommitScene");
-    bvh_bytes_ = rss1 > rss0 ? rss1 - rss0 : 0;
-  }
-
-  bool supports(QueryType) const override { return true; }
+/// One thread's queries: its hit list, the coherent seed and its counters.
+class EmbreeQueries final : public QueryState {
+ public:
+  explicit EmbreeQueries(EmbreeStructure& s) : s_(s) {}
 
   void reset_path() override { has_prev_ = false; }
 
   bool inside(const Vec3d& p) override {
     const bool r = inside_impl(p);
-    if (failed_) check("a ray query");
+    if (s_.failed) s_.check("a ray query");
     return r;
   }
 
   DistanceResult distance(const Vec3d& p) override {
     PointQueryState s;
-    s.vertices = vertices_.data();
-    s.triangles = triangles_.data();
+    s.vertices = s_.vertices.data();
+    s.triangles = s_.triangles.data();
     s.p = p;
     const Vec3f pf(p);
     // Float rounding of the query point (|pf - p| <= sqrt(3) 2^-24 max|p_i|) plus Embree's float
     // box arithmetic at the scene's magnitude: a few float epsilons of the largest coordinate.
     s.margin = 4.0 * std::numeric_limits<float>::epsilon() *
-               (magnitude_ + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
-    const float seeded = (opt_.coherent && has_prev_) ? search_radius(norm(p - prev_closest_), s.margin)
-                                                      : std::numeric_limits<float>::infinity();
+               (s_.magnitude + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
+    const float seeded = (s_.opt.coherent && has_prev_) ? search_radius(norm(p - prev_closest_), s.margin)
+                                                         : std::numeric_limits<float>::infinity();
     point_query(s, pf, seeded);
     if (s.best < 0 && seeded != std::numeric_limits<float>::infinity()) {
       ++fallbacks_;
       point_query(s, pf, std::numeric_limits<float>::infinity());
     }
-    if (failed_) check("rtcPointQuery");
+    if (s_.failed) s_.check("rtcPointQuery");
     if (s.best < 0) throw std::runtime_error("embree: rtcPointQuery found no triangle");
     triangles_tested_ += s.tested;
 
     DistanceResult r;
     r.closest = s.best_q;
     r.triangle = s.best;
-    r.normal = face_normal(vertices_, triangles_[std::size_t(s.best)]);
+    r.normal = face_normal(s_.vertices, s_.triangles[std::size_t(s.best)]);
     const double d = std::sqrt(s.best_d2);
     r.distance = (d > 0 && inside_impl(p)) ? -d : d;
-    if (opt_.coherent) {
+    if (s_.opt.coherent) {
       prev_closest_ = s.best_q;
       has_prev_ = true;
     }
     return r;
   }
-
-  std::size_t structure_bytes() const override { return buffer_bytes() + bvh_bytes_; }
 
   std::vector<Counter> counters() const override {
     return {{"triangles_tested", triangles_tested_},
@@ -259,60 +236,18 @@ class Embree final : public Method {
   void reset_counters() override {
     triangles_tested_ = point_queries_ = rays_shot_ = hits_reported_ = undecided_ = 0;
   }
-
-  /// Embree 3 does not say which ISA it dispatched to (AVX or AVX2), but its native ray packet
-  /// widths say the vector width of the kernels it enabled: 4 (SSE), 8 (AVX, AVX2), 16
-  /// (AVX-512), after the CPU, the ISAs compiled into the library and any `isa=` configuration.
-  nlohmann::json machine_facts() const override {
-    if (!device_) return nlohmann::json::object();
-    std::vector<int> widths;
-    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) widths.push_back(4);
-    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) widths.push_back(8);
-    if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) widths.push_back(16);
-    return {{"embree_native_ray_widths", widths}};
-  }
-
-  nlohmann::json info() const override {
-    return {{"triangles", triangles_.size()},
-            {"degenerate_triangles", degenerate_count_},
-            {"quality", opt_.quality},
-            {"robust", opt_.robust},
-            {"embree_version", RTC_VERSION_STRING},
-            {"bytes",
-             {{"buffers", buffer_bytes()},
-              {"bvh_rss_delta", bvh_bytes_},
-              {"note", "Embree has no size API: its BVH is the RSS growth across rtcCommitScene"}}},
-            {"coherent_fallbacks", fallbacks_}};
-  }
+  std::uint64_t fallbacks() const { return fallbacks_; }
 
  private:
-  static void on_error(void* self, RTCError code, const char* str) {
-    auto* m = static_cast<Embree*>(self);
-    m->failed_ = true;
-    if (m->error_.empty()) m->error_ = std::string(error_name(code)) + (str ? std::string(": ") + str : "");
-  }
-
-  /// Turns a recorded device error into an exception at the method boundary.
-  void check(const char* where) {
-    const RTCError e = rtcGetDeviceError(device_);
-    if (e == RTC_ERROR_NONE && !failed_) return;
-    std::string msg = error_.empty() ? error_name(e) : error_;
-    throw std::runtime_error(std::string("embree: ") + where + ": " + msg);
-  }
-
-  std::size_t buffer_bytes() const {
-    return vertices_.capacity() * sizeof(Vec3f) + triangles_.capacity() * sizeof(triangles_[0]);
-  }
-
   void point_query(PointQueryState& s, const Vec3f& pf, float radius) {
     ++point_queries_;
     RTCPointQuery q;
     q.x = pf.x, q.y = pf.y, q.z = pf.z;
     q.time = 0.f;
     q.radius = radius;
-    RTCPointQueryContext ctx;
+    RTCPointQueryContext ctx;  // per query, on this thread's stack
     rtcInitPointQueryContext(&ctx);
-    rtcPointQuery(scene_, &q, &ctx, &point_query_callback, &s);
+    rtcPointQuery(s_.scene, &q, &ctx, &point_query_callback, &s);
   }
 
   /// Parity of the crossings along the ray from o in direction d; false in *degenerate* when a
@@ -334,7 +269,7 @@ class Embree final : public Method {
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene_, &s.context, &rh);
+    rtcIntersect1(s_.scene, &s.context, &rh);
     ++rays_shot_;
     hits_reported_ += hits_.size();
     std::sort(hits_.begin(), hits_.end());
@@ -344,39 +279,134 @@ class Embree final : public Method {
   }
 
   bool inside_impl(const Vec3d& p) {
-    if (!bounds_.contains(p)) return false;
+    if (!s_.bounds.contains(p)) return false;
     const Vec3f o(p);
     int next = 0, votes_in = 0;
-    for (int v = 0; v < opt_.rays; ++v) {
+    for (int v = 0; v < s_.opt.rays; ++v) {
       bool odd = false, degenerate = true;
       for (int a = 0; a < kMaxAttempts && degenerate; ++a)
-        odd = parity(o, directions_[std::size_t(next++ % kDirections)], &degenerate);
+        odd = parity(o, s_.directions[std::size_t(next++ % kDirections)], &degenerate);
       if (degenerate) ++undecided_;
       votes_in += odd ? 1 : 0;
     }
-    return 2 * votes_in > opt_.rays;
+    return 2 * votes_in > s_.opt.rays;
   }
 
-  Options opt_;
-  std::vector<Vec3f> vertices_;                         // #V + 1 (padding), float32
-  std::vector<std::array<std::uint32_t, 3>> triangles_;  // #F
-  Box3d bounds_;
-  double magnitude_ = 0;  // largest |coordinate| of the mesh
-  std::size_t degenerate_count_ = 0;
-  std::array<Vec3f, kDirections> directions_;
-
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
-  std::size_t bvh_bytes_ = 0;
-  bool failed_ = false;
-  std::string error_;
-
+  EmbreeStructure& s_;  // read-only but for check(), which reads the recorded error
   std::vector<std::uint32_t> hits_;
   bool has_prev_ = false;
   Vec3d prev_closest_;
-
   std::uint64_t triangles_tested_ = 0, point_queries_ = 0, rays_shot_ = 0, hits_reported_ = 0,
                 undecided_ = 0, fallbacks_ = 0;
+};
+
+class Embree final : public SharedStructureMethod<EmbreeQueries> {
+ public:
+  explicit Embree(const Options& o) : s_(std::make_unique<EmbreeStructure>()) {
+    s_->opt = o;
+    std::mt19937_64 rng(0x5eedbeefULL);
+    std::normal_distribution<double> n01;
+    for (auto& d : s_->directions) {
+      Vec3d v;
+      do v = Vec3d(n01(rng), n01(rng), n01(rng));
+      while (norm(v) < 1e-3);
+      d = Vec3f(normalized(v));
+    }
+  }
+
+  ~Embree() override {
+    if (s_->scene) rtcReleaseScene(s_->scene);
+    if (s_->device) rtcReleaseDevice(s_->device);
+  }
+
+  void build(const Mesh& mesh, const BuildContext&) override {
+    if (mesh.triangles.empty()) throw InputError("embree: the mesh has no triangle");
+    if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
+      throw InputError("embree: more triangles than 32-bit primitive ids can address");
+
+    EmbreeStructure& s = *s_;
+    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+    s.vertices = float32_vertices(mesh.vertices, 1);  // + 1: Embree reads the last vertex with a 16-byte load
+    for (std::size_t i = 0; i < nv; ++i) s.bounds.add(Vec3d(s.vertices[i]));
+    s.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
+    for (const auto& t : s.triangles)
+      if (squared_norm(cross(Vec3d(s.vertices[t[1]]) - Vec3d(s.vertices[t[0]]),
+                             Vec3d(s.vertices[t[2]]) - Vec3d(s.vertices[t[0]]))) == 0)
+        ++s.degenerate_count;
+    const Vec3d far = vmax(vmax(s.bounds.lo, -s.bounds.lo), vmax(s.bounds.hi, -s.bounds.hi));
+    s.magnitude = std::max({far.x, far.y, far.z});
+
+    const std::string config = "threads=" + std::to_string(s.opt.threads) + ",verbose=0";
+    s.device = rtcNewDevice(config.c_str());
+    if (!s.device)
+      throw std::runtime_error(std::string("embree: rtcNewDevice(\"") + config +
+                               "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
+    rtcSetDeviceErrorFunction(s.device, &EmbreeStructure::on_error, &s);
+
+    const RTCBuildQuality quality = s.opt.quality == "low"    ? RTC_BUILD_QUALITY_LOW
+                                    : s.opt.quality == "high" ? RTC_BUILD_QUALITY_HIGH
+                                                              : RTC_BUILD_QUALITY_MEDIUM;
+    s.scene = rtcNewScene(s.device);
+    rtcSetSceneFlags(s.scene, s.opt.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneBuildQuality(s.scene, quality);
+    RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geom, quality);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, s.vertices.data(),
+                               0, sizeof(Vec3f), nv);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, s.triangles.data(),
+                               0, sizeof(s.triangles[0]), nt);
+    rtcSetGeometryIntersectFilterFunction(geom, &all_hits_filter);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(s.scene, geom);
+    rtcReleaseGeometry(geom);
+    s.check("building the scene");
+
+    const std::size_t rss0 = current_rss_bytes();
+    rtcCommitScene(s.scene);
+    const std::size_t rss1 = current_rss_bytes();
+    s.check("rtcCommitScene");
+    s.bvh_bytes = rss1 > rss0 ? rss1 - rss0 : 0;
+    start_queries();
+  }
+
+  bool supports(QueryType) const override { return true; }
+
+  std::size_t structure_bytes() const override { return buffer_bytes() + s_->bvh_bytes; }
+
+  /// Embree 3 does not say which ISA it dispatched to (AVX or AVX2), but its native ray packet
+  /// widths say the vector width of the kernels it enabled: 4 (SSE), 8 (AVX, AVX2), 16
+  /// (AVX-512), after the CPU, the ISAs compiled into the library and any `isa=` configuration.
+  nlohmann::json machine_facts() const override {
+    if (!s_->device) return nlohmann::json::object();
+    std::vector<int> widths;
+    if (rtcGetDeviceProperty(s_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) widths.push_back(4);
+    if (rtcGetDeviceProperty(s_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) widths.push_back(8);
+    if (rtcGetDeviceProperty(s_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) widths.push_back(16);
+    return {{"embree_native_ray_widths", widths}};
+  }
+
+  nlohmann::json info() const override {
+    return {{"triangles", s_->triangles.size()},
+            {"degenerate_triangles", s_->degenerate_count},
+            {"quality", s_->opt.quality},
+            {"robust", s_->opt.robust},
+            {"embree_version", RTC_VERSION_STRING},
+            {"bytes",
+             {{"buffers", buffer_bytes()},
+              {"bvh_rss_delta", s_->bvh_bytes},
+              {"note", "Embree has no size API: its BVH is the RSS growth across rtcCommitScene"}}},
+            {"coherent_fallbacks", own_state() ? own_state()->fallbacks() : 0}};
+  }
+
+ private:
+  std::unique_ptr<EmbreeQueries> make_state() const override { return std::make_unique<EmbreeQueries>(*s_); }
+
+  std::size_t buffer_bytes() const {
+    return s_->vertices.capacity() * sizeof(Vec3f) + s_->triangles.capacity() * sizeof(s_->triangles[0]);
+  }
+
+  // On the heap: the device's error callback holds its address, and its mutex does not move.
+  std::unique_ptr<EmbreeStructure> s_;
 };
 
 }  // namespace
@@ -391,6 +421,7 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
       "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
       "by all-hits ray parity with jittered re-shots and majority vote";
   m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  m.caps.concurrent_queries = true;  // per-thread query contexts, hit lists and counters over the committed scene
   // Embree picks its kernels (SSE2, SSE4.2, AVX, AVX2, AVX-512) from the processor when the
   // device is made, and with them the BVH it builds (BVH8 where it may use AVX, else BVH4; on
   // Intel also by CPU model) and the float arithmetic of its tests (AVX2 and AVX-512 kernels

@@ -17,7 +17,7 @@
 //        inside the solid reaches the surface before the nearest box face).
 //    band=fixed uses ex_band/in_band as given. Either way, points beyond the band read the clamped
 //    value: that is error in the accuracy figures, and it is left there.
-//  - queries (single-threaded, one cached ValueAccessor per grid): the value by trilinear (order
+//  - queries (one cached ValueAccessor per grid and per query thread, OpenVdbQueries): the value by trilinear (order
 //    1, value and analytic gradient from the same 8 voxels) or OpenVDB's triquadratic sampler
 //    (order 2, gradient by central differences); inside(p) is sdf(p) < 0; the normal is the
 //    normalised gradient at p (points outward: the field grows outward); the closest point is
@@ -47,6 +47,7 @@
 #include "harness/core/library_versions.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 
 namespace bvhbench {
@@ -90,7 +91,172 @@ double surface_area(const Mesh& mesh) {
   return a;
 }
 
-class OpenVdbSdf final : public Method {
+/// World point p in the field's index space (origin at the mesh box centre, one unit a voxel).
+inline Vec3d index_coords(const Vec3d& p, const Vec3d& origin, double inv_voxel) { return (p - origin) * inv_voxel; }
+
+/// The built field and what queries read, shared read-only by every thread's queries.
+struct Field {
+  FloatGrid::Ptr sdf;
+  Int32Grid::Ptr index;  ///< distance jobs with closest_triangle: the polygon index per voxel
+  int order = 1, closest_steps = 2;
+  double inv_voxel = 1;
+  Vec3d origin, dom_lo, dom_hi;
+  bool has_domain = false;
+  double exterior_value = 0, interior_value = 0;
+};
+
+/// One thread's queries: its own value accessors (OpenVDB's accessors cache the path to the last
+/// leaf and are not safe to share; a ConstUnsafeAccessor per thread over a grid nobody writes is)
+/// and its counters.
+class OpenVdbQueries final : public QueryState {
+ public:
+  explicit OpenVdbQueries(const Field& f) : f_(f), sdf_acc_(f.sdf->tree()) {
+    if (f.index) index_acc_.emplace(f.index->tree());
+  }
+
+  bool inside(const Vec3d& p) override { return value_at(to_index(p)) < 0.0; }
+
+  DistanceResult distance(const Vec3d& p) override {
+    DistanceResult r;
+    const Vec3d x = to_index(p);
+    Vec3d g;
+    const double d = value_and_gradient(x, &g);
+    r.distance = d;
+    r.normal = normalized(g);
+    Vec3d q = p, gq = g;
+    double dq = d;
+    for (int s = 0; s < f_.closest_steps; ++s) {
+      const double gn = norm(gq);
+      if (!(gn > 0)) break;  // clamped region: no direction to follow, q stays put
+      q -= gq * (dq / gn);
+      if (s + 1 < f_.closest_steps) dq = value_and_gradient(to_index(q), &gq);
+    }
+    r.closest = q;
+    if (index_acc_) {
+      r.triangle = triangle_at(x);
+      if (r.triangle < 0 && q != p) r.triangle = triangle_at(to_index(q));
+    }
+    return r;
+  }
+
+  std::vector<Counter> counters() const override {
+    return {{"voxel_lookups", voxel_lookups_},
+            {"gradient_evaluations", gradient_evaluations_},
+            {"index_lookups", index_lookups_},
+            {"clamped_samples", clamped_samples_}};
+  }
+  void reset_counters() override {
+    voxel_lookups_ = gradient_evaluations_ = index_lookups_ = clamped_samples_ = 0;
+  }
+
+ private:
+  Vec3d to_index(const Vec3d& p) const { return index_coords(p, f_.origin, f_.inv_voxel); }
+
+  bool in_domain(const Vec3d& x) const {
+    return f_.has_domain && x.x >= f_.dom_lo.x && x.y >= f_.dom_lo.y && x.z >= f_.dom_lo.z &&
+           x.x <= f_.dom_hi.x && x.y <= f_.dom_hi.y && x.z <= f_.dom_hi.z;
+  }
+
+  /// Counts samples that read the clamped band value (beyond the band: a known error).
+  void note_clamp(double v) {
+    if (v >= f_.exterior_value * (1 - 1e-6) || v <= f_.interior_value * (1 - 1e-6)) ++clamped_samples_;
+  }
+
+  /// Sampled sdf at index-space point x (world units).
+  double value_at(const Vec3d& x) {
+    if (!in_domain(x)) {
+      ++clamped_samples_;
+      return f_.exterior_value;
+    }
+    double v;
+    if (f_.order == 1) {
+      float c[8];
+      fetch8(x, c);
+      const Vec3d f(x.x - std::floor(x.x), x.y - std::floor(x.y), x.z - std::floor(x.z));
+      v = trilinear(c, f);
+    } else {
+      v = double(openvdb::tools::QuadraticSampler::sample(sdf_acc_, openvdb::Vec3R(x.x, x.y, x.z)));
+      voxel_lookups_ += 27;
+    }
+    note_clamp(v);
+    return v;
+  }
+
+  /// Sampled sdf and its gradient (world units, |g| ~ 1 in the band, 0 where clamped).
+  double value_and_gradient(const Vec3d& x, Vec3d* g) {
+    ++gradient_evaluations_;
+    if (!in_domain(x)) {
+      ++clamped_samples_;
+      *g = Vec3d();
+      return f_.exterior_value;
+    }
+    if (f_.order == 1) {
+      float c[8];
+      fetch8(x, c);
+      const Vec3d f(x.x - std::floor(x.x), x.y - std::floor(x.y), x.z - std::floor(x.z));
+      // c[(dx<<2)|(dy<<1)|dz]; analytic derivative of the trilinear blend.
+      auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
+      const double x00 = lerp(c[0], c[4], f.x), x01 = lerp(c[1], c[5], f.x);
+      const double x10 = lerp(c[2], c[6], f.x), x11 = lerp(c[3], c[7], f.x);
+      const double y0 = lerp(x00, x10, f.y), y1 = lerp(x01, x11, f.y);
+      const double v = lerp(y0, y1, f.z);
+      const double dz = y1 - y0;
+      const double dy = lerp(x10 - x00, x11 - x01, f.z);
+      const double dx = lerp(lerp(c[4] - c[0], c[6] - c[2], f.y), lerp(c[5] - c[1], c[7] - c[3], f.y), f.z);
+      *g = Vec3d(dx, dy, dz) * f_.inv_voxel;
+      note_clamp(v);
+      return v;
+    }
+    const double h = 0.5;
+    auto s = [&](double ox, double oy, double oz) {
+      voxel_lookups_ += 27;
+      return double(openvdb::tools::QuadraticSampler::sample(
+          sdf_acc_, openvdb::Vec3R(x.x + ox, x.y + oy, x.z + oz)));
+    };
+    const double v = s(0, 0, 0);
+    *g = Vec3d(s(h, 0, 0) - s(-h, 0, 0), s(0, h, 0) - s(0, -h, 0), s(0, 0, h) - s(0, 0, -h)) *
+         (f_.inv_voxel / (2 * h));
+    note_clamp(v);
+    return v;
+  }
+
+  void fetch8(const Vec3d& x, float c[8]) {
+    const Coord i0(int(std::floor(x.x)), int(std::floor(x.y)), int(std::floor(x.z)));
+    auto& a = sdf_acc_;
+    c[0] = a.getValue(i0);
+    c[1] = a.getValue(i0.offsetBy(0, 0, 1));
+    c[2] = a.getValue(i0.offsetBy(0, 1, 0));
+    c[3] = a.getValue(i0.offsetBy(0, 1, 1));
+    c[4] = a.getValue(i0.offsetBy(1, 0, 0));
+    c[5] = a.getValue(i0.offsetBy(1, 0, 1));
+    c[6] = a.getValue(i0.offsetBy(1, 1, 0));
+    c[7] = a.getValue(i0.offsetBy(1, 1, 1));
+    voxel_lookups_ += 8;
+  }
+
+  static double trilinear(const float c[8], const Vec3d& f) {
+    auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
+    const double x00 = lerp(c[0], c[4], f.x), x01 = lerp(c[1], c[5], f.x);
+    const double x10 = lerp(c[2], c[6], f.x), x11 = lerp(c[3], c[7], f.x);
+    return lerp(lerp(x00, x10, f.y), lerp(x01, x11, f.y), f.z);
+  }
+
+  std::int64_t triangle_at(const Vec3d& x) {
+    if (!in_domain(x)) return -1;
+    ++index_lookups_;
+    const Coord c(int(std::floor(x.x + 0.5)), int(std::floor(x.y + 0.5)), int(std::floor(x.z + 0.5)));
+    const openvdb::Int32 t = index_acc_->getValue(c);
+    return t < 0 ? -1 : std::int64_t(t);
+  }
+
+  // parameters
+  const Field& f_;
+  FloatGrid::ConstUnsafeAccessor sdf_acc_;
+  std::optional<Int32Grid::ConstUnsafeAccessor> index_acc_;
+  std::uint64_t voxel_lookups_ = 0, gradient_evaluations_ = 0, index_lookups_ = 0, clamped_samples_ = 0;
+};
+
+class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
  public:
   explicit OpenVdbSdf(const Params& p)
       : voxel_rel_(p.get_real("voxel")),
@@ -120,47 +286,11 @@ class OpenVdbSdf final : public Method {
 
   bool supports(QueryType) const override { return true; }
 
-  bool inside(const Vec3d& p) override { return value_at(to_index(p)) < 0.0; }
-
-  DistanceResult distance(const Vec3d& p) override {
-    DistanceResult r;
-    const Vec3d x = to_index(p);
-    Vec3d g;
-    const double d = value_and_gradient(x, &g);
-    r.distance = d;
-    r.normal = normalized(g);
-    // Project onto the zero level set along the gradient; |grad sdf| = 1 in the band.
-    Vec3d q = p, gq = g;
-    double dq = d;
-    for (int s = 0; s < closest_steps_; ++s) {
-      const double gn = norm(gq);
-      if (!(gn > 0)) break;  // clamped region: no direction to follow, q stays put
-      q -= gq * (dq / gn);
-      if (s + 1 < closest_steps_) dq = value_and_gradient(to_index(q), &gq);
-    }
-    r.closest = q;
-    if (index_acc_) {
-      r.triangle = triangle_at(x);
-      if (r.triangle < 0 && q != p) r.triangle = triangle_at(to_index(q));
-    }
-    return r;
-  }
-
   std::size_t structure_bytes() const override {
     std::size_t b = sizeof(*this);
     if (sdf_) b += std::size_t(sdf_->memUsage());
     if (index_) b += std::size_t(index_->memUsage());
     return b;
-  }
-
-  std::vector<Counter> counters() const override {
-    return {{"voxel_lookups", voxel_lookups_},
-            {"gradient_evaluations", gradient_evaluations_},
-            {"index_lookups", index_lookups_},
-            {"clamped_samples", clamped_samples_}};
-  }
-  void reset_counters() override {
-    voxel_lookups_ = gradient_evaluations_ = index_lookups_ = clamped_samples_ = 0;
   }
 
   nlohmann::json info() const override {
@@ -186,9 +316,9 @@ class OpenVdbSdf final : public Method {
   }
 
  private:
+  std::unique_ptr<OpenVdbQueries> make_state() const override { return std::make_unique<OpenVdbQueries>(field_); }
+
   void build_impl(const Mesh& mesh, const BuildContext& ctx) {
-    index_acc_.reset();
-    sdf_acc_.reset();
     index_.reset();
     sdf_.reset();
     std::optional<tbb::global_control> limit;
@@ -249,7 +379,7 @@ class OpenVdbSdf final : public Method {
     // ---- the mesh in index space; polygon i is mesh triangle i ----
     std::vector<openvdb::Vec3s> pts(mesh.vertices.size());
     for (std::size_t i = 0; i < pts.size(); ++i) {
-      const Vec3d x = to_index(mesh.vertices[i]);
+      const Vec3d x = index_coords(mesh.vertices[i], origin_, inv_voxel_);
       pts[i] = openvdb::Vec3s(float(x.x), float(x.y), float(x.z));
     }
     std::vector<openvdb::Vec3I> tris(mesh.triangles.size());
@@ -280,110 +410,20 @@ class OpenVdbSdf final : public Method {
       dom_lo_ = Vec3d(bb.min().x() - 2.0, bb.min().y() - 2.0, bb.min().z() - 2.0);
       dom_hi_ = Vec3d(bb.max().x() + 2.0, bb.max().y() + 2.0, bb.max().z() + 2.0);
     }
-    sdf_acc_.emplace(sdf_->tree());
-    if (index_) index_acc_.emplace(index_->tree());
+    field_.sdf = sdf_;
+    field_.index = index_;
+    field_.order = order_;
+    field_.closest_steps = closest_steps_;
+    field_.inv_voxel = inv_voxel_;
+    field_.origin = origin_;
+    field_.dom_lo = dom_lo_;
+    field_.dom_hi = dom_hi_;
+    field_.has_domain = has_domain_;
+    field_.exterior_value = exterior_value_;
+    field_.interior_value = interior_value_;
+    start_queries();
   }
 
-  Vec3d to_index(const Vec3d& p) const { return (p - origin_) * inv_voxel_; }
-
-  bool in_domain(const Vec3d& x) const {
-    return has_domain_ && x.x >= dom_lo_.x && x.y >= dom_lo_.y && x.z >= dom_lo_.z &&
-           x.x <= dom_hi_.x && x.y <= dom_hi_.y && x.z <= dom_hi_.z;
-  }
-
-  /// Counts samples that read the clamped band value (beyond the band: a known error).
-  void note_clamp(double v) {
-    if (v >= exterior_value_ * (1 - 1e-6) || v <= interior_value_ * (1 - 1e-6)) ++clamped_samples_;
-  }
-
-  /// Sampled sdf at index-space point x (world units).
-  double value_at(const Vec3d& x) {
-    if (!in_domain(x)) {
-      ++clamped_samples_;
-      return exterior_value_;
-    }
-    double v;
-    if (order_ == 1) {
-      float c[8];
-      fetch8(x, c);
-      const Vec3d f(x.x - std::floor(x.x), x.y - std::floor(x.y), x.z - std::floor(x.z));
-      v = trilinear(c, f);
-    } else {
-      v = double(openvdb::tools::QuadraticSampler::sample(*sdf_acc_, openvdb::Vec3R(x.x, x.y, x.z)));
-      voxel_lookups_ += 27;
-    }
-    note_clamp(v);
-    return v;
-  }
-
-  /// Sampled sdf and its gradient (world units, |g| ~ 1 in the band, 0 where clamped).
-  double value_and_gradient(const Vec3d& x, Vec3d* g) {
-    ++gradient_evaluations_;
-    if (!in_domain(x)) {
-      ++clamped_samples_;
-      *g = Vec3d();
-      return exterior_value_;
-    }
-    if (order_ == 1) {
-      float c[8];
-      fetch8(x, c);
-      const Vec3d f(x.x - std::floor(x.x), x.y - std::floor(x.y), x.z - std::floor(x.z));
-      // c[(dx<<2)|(dy<<1)|dz]; analytic derivative of the trilinear blend.
-      auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
-      const double x00 = lerp(c[0], c[4], f.x), x01 = lerp(c[1], c[5], f.x);
-      const double x10 = lerp(c[2], c[6], f.x), x11 = lerp(c[3], c[7], f.x);
-      const double y0 = lerp(x00, x10, f.y), y1 = lerp(x01, x11, f.y);
-      const double v = lerp(y0, y1, f.z);
-      const double dz = y1 - y0;
-      const double dy = lerp(x10 - x00, x11 - x01, f.z);
-      const double dx = lerp(lerp(c[4] - c[0], c[6] - c[2], f.y), lerp(c[5] - c[1], c[7] - c[3], f.y), f.z);
-      *g = Vec3d(dx, dy, dz) * inv_voxel_;
-      note_clamp(v);
-      return v;
-    }
-    const double h = 0.5;
-    auto s = [&](double ox, double oy, double oz) {
-      voxel_lookups_ += 27;
-      return double(openvdb::tools::QuadraticSampler::sample(
-          *sdf_acc_, openvdb::Vec3R(x.x + ox, x.y + oy, x.z + oz)));
-    };
-    const double v = s(0, 0, 0);
-    *g = Vec3d(s(h, 0, 0) - s(-h, 0, 0), s(0, h, 0) - s(0, -h, 0), s(0, 0, h) - s(0, 0, -h)) *
-         (inv_voxel_ / (2 * h));
-    note_clamp(v);
-    return v;
-  }
-
-  void fetch8(const Vec3d& x, float c[8]) {
-    const Coord i0(int(std::floor(x.x)), int(std::floor(x.y)), int(std::floor(x.z)));
-    auto& a = *sdf_acc_;
-    c[0] = a.getValue(i0);
-    c[1] = a.getValue(i0.offsetBy(0, 0, 1));
-    c[2] = a.getValue(i0.offsetBy(0, 1, 0));
-    c[3] = a.getValue(i0.offsetBy(0, 1, 1));
-    c[4] = a.getValue(i0.offsetBy(1, 0, 0));
-    c[5] = a.getValue(i0.offsetBy(1, 0, 1));
-    c[6] = a.getValue(i0.offsetBy(1, 1, 0));
-    c[7] = a.getValue(i0.offsetBy(1, 1, 1));
-    voxel_lookups_ += 8;
-  }
-
-  static double trilinear(const float c[8], const Vec3d& f) {
-    auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
-    const double x00 = lerp(c[0], c[4], f.x), x01 = lerp(c[1], c[5], f.x);
-    const double x10 = lerp(c[2], c[6], f.x), x11 = lerp(c[3], c[7], f.x);
-    return lerp(lerp(x00, x10, f.y), lerp(x01, x11, f.y), f.z);
-  }
-
-  std::int64_t triangle_at(const Vec3d& x) {
-    if (!in_domain(x)) return -1;
-    ++index_lookups_;
-    const Coord c(int(std::floor(x.x + 0.5)), int(std::floor(x.y + 0.5)), int(std::floor(x.z + 0.5)));
-    const openvdb::Int32 t = index_acc_->getValue(c);
-    return t < 0 ? -1 : std::int64_t(t);
-  }
-
-  // parameters
   double voxel_rel_, voxel_abs_;
   bool auto_band_;
   double ex_band_, in_band_;
@@ -397,15 +437,12 @@ class OpenVdbSdf final : public Method {
   // the structure (grids before their accessors: accessors are destroyed first)
   FloatGrid::Ptr sdf_;
   Int32Grid::Ptr index_;
-  std::optional<FloatGrid::ConstUnsafeAccessor> sdf_acc_;
-  std::optional<Int32Grid::ConstUnsafeAccessor> index_acc_;
   double voxel_ = 1, inv_voxel_ = 1;
   Vec3d origin_, dom_lo_, dom_hi_;
   bool has_domain_ = false;
   double ex_vox_ = 0, in_vox_ = 0, exterior_value_ = 0, interior_value_ = 0;
   double estimated_voxels_ = 0, dense_query_voxels_ = 0;
-
-  std::uint64_t voxel_lookups_ = 0, gradient_evaluations_ = 0, index_lookups_ = 0, clamped_samples_ = 0;
+  Field field_;  // what queries read, set at the end of build
 };
 
 }  // namespace
@@ -421,6 +458,7 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       "OpenVDB signed distance field (meshToVolume): sampled distance, gradient normal and "
       "projection, inside by sign, closest triangle from the polygon-index grid";
   m.caps = {true, true, true, false, false};
+  m.caps.concurrent_queries = true;  // per-thread value accessors over grids nobody writes
   // None: our counters count our own samples of the grid, whose values meshToVolume computes in
   // header templates compiled here (no run-time CPU dispatch: OPENVDB_USE_SSE42/AVX are
   // compile-time switches, off; libopenvdb itself has no CPUID or ifunc). Each voxel's distance

@@ -18,7 +18,10 @@
 namespace ebp {
 
 OutOfCore::OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold)
-    : store_(std::make_unique<StoreReader>(path)),
+    : OutOfCore(std::make_shared<const StoreReader>(path), cache_bytes, coherent, cold) {}
+
+OutOfCore::OutOfCore(std::shared_ptr<const StoreReader> store, std::size_t cache_bytes, bool coherent, bool cold)
+    : store_(std::move(store)),
       cache_(*store_, cache_bytes, coherent),
       coherent_(coherent),
       cold_(cold),

@@ -20,6 +20,10 @@ class OutOfCore {
   /// Opens the store (throws bvhbench::InputError on a bad file). `cold`: evict the file from
   /// the OS page cache now and at every reset_path(), and start each path with an empty cache.
   OutOfCore(const std::string& path, std::size_t cache_bytes, bool coherent, bool cold);
+  /// Over a store another OutOfCore opened: one per thread, each with its own page cache (and
+  /// its pages' query states), sharing the pinned top tree and the file. StoreReader's reads are
+  /// const and positioned (pread), so several threads may load pages at once.
+  OutOfCore(std::shared_ptr<const StoreReader> store, std::size_t cache_bytes, bool coherent, bool cold);
   ~OutOfCore();
   /// Points and closest points in world coordinates (translated once, in double, by the store's
   /// frame origin; FileHeader::origin).
@@ -36,11 +40,12 @@ class OutOfCore {
   void reset_counters();
   const PageCache& cache() const { return cache_; }
   const StoreReader& store() const { return *store_; }
+  const std::shared_ptr<const StoreReader>& shared_store() const { return store_; }
   /// Pinned bytes (top tree, directory, bookkeeping) + the cache's resident bytes.
   std::size_t bytes() const;
 
  private:
-  std::unique_ptr<StoreReader> store_;
+  std::shared_ptr<const StoreReader> store_;
   PageCache cache_;
   bool coherent_, cold_;
   const TopNode* top_;

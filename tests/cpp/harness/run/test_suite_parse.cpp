@@ -79,3 +79,27 @@ TEST(SuiteParse, ASuiteOfMillionsOfJobsIsRefused) {
   EXPECT_EQ(parse_suite("_m: &m {meshes: [a], queries: [random], methods: [brute_force]}\nmatrices: [*m, *m]\n", "s.yml").jobs.size(),
             2u);
 }
+
+// The thread axis: `threads:` of a matrix, a count or a list; one job per count, and a job on
+// more than one thread has "__t<T>" at the end of its id (one thread keeps the id it had).
+TEST(SuiteParse, TheThreadAxisMakesOneJobPerThreadCount) {
+  const SuiteConfig cfg = parse_suite(
+      "matrices:\n  - meshes: [m.ply]\n    queries: [random]\n    query: [inside]\n    methods: [brute_force]\n"
+      "    threads: [1, 2, 4, 2]\n",
+      "s.yml");
+  ASSERT_EQ(cfg.jobs.size(), 3u);  // the repeated 2 once
+  EXPECT_EQ(cfg.jobs[0].threads, 1);
+  EXPECT_EQ(cfg.jobs[0].id, "m__random-n10000-s1__inside__brute_force");
+  EXPECT_EQ(cfg.jobs[1].threads, 2);
+  EXPECT_EQ(cfg.jobs[1].id, "m__random-n10000-s1__inside__brute_force__t2");
+  EXPECT_EQ(cfg.jobs[2].id, "m__random-n10000-s1__inside__brute_force__t4");
+  const SuiteConfig one = parse_suite(suite("[brute_force]"), "s.yml");
+  ASSERT_EQ(one.jobs.size(), 1u);
+  EXPECT_EQ(one.jobs[0].threads, 1);
+  const SuiteConfig scalar = parse_suite(suite("[brute_force]") + "    threads: 8\n", "s.yml");
+  ASSERT_EQ(scalar.jobs.size(), 1u);
+  EXPECT_EQ(scalar.jobs[0].threads, 8);
+  for (const char* bad : {"0", "-2", "1025", "two", "[]", "{a: 1}"})
+    expect_input_error([&] { parse_suite(suite("[brute_force]") + "    threads: " + bad + "\n", "s.yml"); }, "s.yml",
+                       "threads");
+}
