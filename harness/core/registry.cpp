@@ -42,6 +42,12 @@ const MethodInfo* Registry::find(const std::string& name) const {
   return nullptr;
 }
 
+bool Registry::is_left_out(const std::string& name) const {
+  for (const auto& entry : left_out_)
+    if (entry.first == name) return true;
+  return false;
+}
+
 MethodSpec Registry::describe(const std::string& text) const {
   MethodSpec spec;
   try {

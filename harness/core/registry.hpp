@@ -55,6 +55,8 @@ class Registry {
   const std::vector<std::string>& notes() const { return notes_; }
   /// Method name -> why it is left out, in the order noted.
   const std::vector<std::pair<std::string, std::string>>& left_out() const { return left_out_; }
+  /// Whether `name` is a method this build left out (add_left_out), rather than unknown.
+  bool is_left_out(const std::string& name) const;
   const MethodInfo* find(const std::string& name) const;
   const std::vector<MethodInfo>& methods() const { return methods_; }
   const std::vector<CommandInfo>& commands() const { return commands_; }

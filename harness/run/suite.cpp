@@ -220,12 +220,12 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
     std::vector<MethodSpec> methods;
     for (auto n : as_list(m["methods"]))
       for (auto& s : expand_method(path, n)) {
-        // Parsed and resolved once, now: a typo in a suite is bad input, not 40 failed jobs.
-        try {
-          methods.push_back(Registry::global().resolve(s));
-        } catch (const InputError& e) {
-          yaml_error(path, n, e.what());
-        }
+        // Parsed and resolved once, now: a typo in a suite is bad input, not 40 failed jobs. A
+        // method this build left out (a Python method whose package is not installed) is no typo:
+        // its jobs stay in the suite, unresolved, and become `unsupported` rows with the reason.
+        MethodSpec spec = Registry::global().describe(s);
+        if (!spec.resolved() && !Registry::global().is_left_out(spec.name)) yaml_error(path, n, spec.problem);
+        methods.push_back(std::move(spec));
         if (methods.size() > kMaxSuiteJobs)
           yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
       }

@@ -164,6 +164,10 @@ SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
     task.spec.query_type = j.query;
     task.spec.repeat = cfg.repeat;
     task.spec.threads = j.threads;
+    if (!j.method.resolved()) {  // left out of this build (suite.cpp): nothing to run
+      record(i, job_failure_row(task.spec, j, status::unsupported, j.method.problem));
+      continue;
+    }
     const QuerySetFile qs = shared.queries(j);
     if (interrupted()) break;  // the query set was cut short: not this job's failure
     task.spec.queries_path = qs.path;

@@ -19,11 +19,18 @@
 //  - exact_float32 (ebp_octree): exact on the float32-rounded mesh, so bit for bit with
 //    brute_force built on that mesh: the same |distance|, closest point and triangle (the
 //    lexicographic minimum of squared distance and index); the same inside away from the surface.
-//  - float32 (cgal_aabb, embree, the Python methods libigl, trimesh and fcpw, and any new
-//    method; libigl and trimesh compute in double, fcpw in float32): the checks of expect_matches_brute_force
+//  - float32 (cgal_aabb, embree, and any new method): the checks of expect_matches_brute_force
 //    (test_support.hpp) against brute_force on the float32-rounded mesh: |distance| within 1e-5
 //    of the diagonal (float32 coordinates carry 24 bits, ~6e-8 of the diagonal per coordinate; a
 //    method may compute in float on them), the closest triangle or a tie, its face normal.
+//  - double_library (the Python method libigl): the library keeps the mesh in double as given, so
+//    float32's checks against brute_force on that mesh (on the float32-rounded one a sliver's face
+//    normal or a near tie differs by the rounding, not by the method).
+//  - approximate_library (the Python methods trimesh and fcpw): the mesh as given, but the closest
+//    triangle is only as good as the distance: a "tie" is within the distance's own tolerance, 1e-5
+//    of the diagonal, and a point on the surface is within 1e-6 of it. fcpw searches in float32
+//    arithmetic; trimesh's on_surface picked a triangle up to 7e-7 farther than the closest on 1-2
+//    of 2000 random points of fandisk and rocker-arm (measured), both well inside 1e-5.
 //  - sampled_field (openvdb): a distance field sampled on voxels, so the tolerance is in voxels
 //    v, read from the built field (info(): voxel_size, its bands): see expect_field_conforms.
 #include <gtest/gtest.h>
@@ -54,13 +61,16 @@ namespace {
 // ---- the variants under test ----
 
 /// How close a method's answers must be to brute_force's (see the file comment).
-enum class Precision { exact_double, exact_float32, float32, sampled_field };
+enum class Precision { exact_double, exact_float32, float32, double_library, approximate_library, sampled_field };
 
 /// The precision a method declares in its description and documentation; float32 by default.
 Precision declared_precision(const std::string& method) {
   static const std::map<std::string, Precision> declared = {
       {"brute_force", Precision::exact_double},
       {"ebp_octree", Precision::exact_float32},
+      {"libigl", Precision::double_library},
+      {"trimesh", Precision::approximate_library},
+      {"fcpw", Precision::approximate_library},
       {"openvdb", Precision::sampled_field}};
   const auto it = declared.find(method);
   return it == declared.end() ? Precision::float32 : it->second;
@@ -170,17 +180,22 @@ Params resolved_params(const std::string& spec) { return Registry::global().reso
 ///  - float32: |distance| within 1e-5 of the diagonal and |closest - p| = |distance| within 1e-9
 ///    of it; the same triangle or a tie (brute_force's distance to it the minimum within 1e-9 of
 ///    the diagonal); the normal that triangle's face normal within 1e-6.
+///  - double_library and approximate_library: float32's checks on the mesh as given; approximate_library's
+///    ties within 1e-5 of the diagonal.
 /// Inside and the distance's sign, when `closed`: every query for exact_double (the reference
 /// itself); otherwise farther than 1e-6 of the diagonal from the surface, where brute_force's
 /// floating point winding number is certainly on the right side of 1/2. On an open surface a
 /// parity method and the winding number disagree by design: only |distance| is owed.
 void expect_surface_conforms(const Variant& v, Precision precision, const Mesh& mesh, bool closed,
                              const std::vector<Vec3d>& q, const std::string& kind) {
-  const bool bit_for_bit = precision != Precision::float32;
-  const Mesh ref_mesh = precision == Precision::exact_double ? mesh : float_rounded(mesh);
+  const bool bit_for_bit = precision == Precision::exact_double || precision == Precision::exact_float32;
+  const bool as_given = precision == Precision::exact_double || precision == Precision::double_library ||
+                        precision == Precision::approximate_library;
+  const Mesh ref_mesh = as_given ? mesh : float_rounded(mesh);
   const auto want = brute_force_answers(ref_mesh, q);
   const double diag = ref_mesh.bounds().diagonal();
   const double sign_margin = precision == Precision::exact_double ? -1.0 : 1e-6 * diag;
+  const double tie = (precision == Precision::approximate_library ? 1e-5 : 1e-9) * diag;
   Tally distance, closest, triangle, normal, sign, inside;
   auto ins = build_for(v.spec, mesh, QueryType::inside, q, kind);
   auto dist = build_for(v.spec, mesh, QueryType::distance, q, kind);
@@ -205,7 +220,7 @@ void expect_surface_conforms(const Variant& v, Precision precision, const Mesh& 
                     "|closest - p| is not |distance|", p);
       const bool known = got.triangle >= 0 && std::size_t(got.triangle) < mesh.triangles.size();
       triangle.check(known && (got.triangle == want[i].triangle ||
-                               std::abs(distance_to_triangle(ref_mesh, got.triangle, p) - want_abs) <= 1e-9 * diag),
+                               std::abs(distance_to_triangle(ref_mesh, got.triangle, p) - want_abs) <= tie),
                      "triangle neither brute_force's nor a tie: " + answered, p);
       if (known) {
         const auto& f = ref_mesh.triangles[std::size_t(got.triangle)];
@@ -453,7 +468,10 @@ TEST_P(MethodConformance, EmptyMeshIsRefusedCleanly) {
 // outside.
 TEST_P(MethodConformance, OneTriangle) {
   const Variant& v = GetParam();
-  if (declared_precision(v.method) != Precision::sampled_field) return expect_one_triangle_answers(v.spec);
+  const Precision precision = declared_precision(v.method);
+  // The triangle's diagonal is ~1.4: on the surface within 1e-6 for an approximate library.
+  if (precision == Precision::approximate_library) return expect_one_triangle_answers(v.spec, 1e-6);
+  if (precision != Precision::sampled_field) return expect_one_triangle_answers(v.spec);
   // A field: within a voxel of the triangle, the clamp far away.
   const Mesh m = one_triangle();
   const std::vector<Vec3d> box = {{-0.2, -0.2, -0.2}, {1.2, 1.2, 0.4}};

@@ -226,6 +226,32 @@ def test_a_missing_package_leaves_the_method_out_with_a_note(host, toy, data, tm
     assert "method 'toy' is not available in this build: needs the Python module(s) no_such_package_xyz" in p.stderr
 
 
+def test_a_suite_naming_a_left_out_method_runs_the_rest_and_records_it_unsupported(host, toy, tmp_path):
+    # A suite written for a machine with every package (suites/default.yml names the Python
+    # methods) still runs where one is missing: its jobs are `unsupported` rows with the reason,
+    # the other methods' jobs run. A method nobody knows is still a typo: exit 2.
+    (toy / "method.py").write_text(TOY.replace('REQUIRES = ["numpy"]', 'REQUIRES = ["numpy", "no_such_package_xyz"]'))
+    suite = tmp_path / "s.yml"
+    suite.write_text(f"""name: leftout
+repeat: 1
+truth: false
+matrices:
+  - meshes: [{MESH}]
+    queries: [{{kind: random, n: 20, seed: 1}}]
+    query: [inside]
+    methods: [brute_force, toy]
+""")
+    run("suite", suite, "--out", tmp_path / "out", env=with_methods(toy), check=0)
+    rows = {json.loads(f.read_text())["job"]["method"]: json.loads(f.read_text())
+            for f in (tmp_path / "out" / "runs").glob("*.json")}
+    assert rows["brute_force"]["status"]["code"] == "ok"
+    assert rows["toy"]["status"]["code"] == "unsupported"
+    assert "not available in this build: needs the Python module(s) no_such_package_xyz" in rows["toy"]["status"]["message"]
+    suite.write_text(suite.read_text().replace("toy]", "toy_typo]"))
+    p = run("suite", suite, "--out", tmp_path / "out2", env=with_methods(toy), check=2)
+    assert "unknown method 'toy_typo'" in p.stderr
+
+
 def test_malformed_declarations_leave_the_method_out_with_a_note(host, toy):
     (toy / "method.py").write_text(TOY.replace('DESCRIPTION = "toy: nearest vertex"', 'DESCRIPTION = str(1)'))
     methods, notes = listing(with_methods(toy))

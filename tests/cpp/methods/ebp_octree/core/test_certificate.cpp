@@ -182,7 +182,12 @@ TEST(EbpCertificate, StressMeshesAreExact) {
   }
   for (const auto& [name, m] : meshes) {
     const Octree t = build(m);
-    const Reference ref(m.vertices, m.triangles);
+    // Query works in the tree's frame (Octree::origin: not 0 for the model far from the origin),
+    // so the reference and the path are in it too: v - origin is exact in double, and rounding it
+    // to float gives the geometry the tree holds.
+    std::vector<Vec3d> frame_vertices;
+    for (const Vec3d& v : m.vertices) frame_vertices.push_back(t.to_frame(v));
+    const Reference ref(frame_vertices, m.triangles);
     const double diag = ref.bounds().diagonal();
     const Vec3d c = (ref.bounds().lo + ref.bounds().hi) * 0.5;
     std::vector<Vec3d> path;
