@@ -285,6 +285,24 @@ inline Mesh open_cup() {
   return m;
 }
 
+/// 2n query points around `m`, drawn from `rng` in this order: n uniform in its vertices' box grown
+/// by 10 % of its extent on each side, then n within 1 % of the box's diagonal (per coordinate) of
+/// random vertices.
+inline std::vector<Vec3d> box_and_near_vertex_points(const Mesh& m, std::size_t n, std::mt19937_64& rng) {
+  Box3d b;
+  for (const Vec3d& v : m.vertices) b.add(v);
+  const Vec3d e = b.extent();
+  std::uniform_real_distribution<double> u(-0.1, 1.1), s(-1, 1);
+  std::vector<Vec3d> q;
+  for (std::size_t i = 0; i < n; ++i) q.push_back({b.lo.x + u(rng) * e.x, b.lo.y + u(rng) * e.y, b.lo.z + u(rng) * e.z});
+  const double h = 0.01 * b.diagonal();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3d& v = m.vertices[rng() % m.vertices.size()];
+    q.push_back({v.x + h * s(rng), v.y + h * s(rng), v.z + h * s(rng)});
+  }
+  return q;
+}
+
 /// A closed torus (procedural), nu x nv quads split in two; `open` drops half of the tube.
 inline Mesh torus(int nu, int nv, double R = 1.0, double r = 0.35, bool open = false) {
   Mesh m;

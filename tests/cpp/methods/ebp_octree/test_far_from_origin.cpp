@@ -72,19 +72,8 @@ struct Brute {
 
 /// Random points in the box grown by 10 %, and near the surface (within 1 % of the diagonal).
 std::vector<Vec3d> points(const bvhbench::Mesh& m, std::size_t n) {
-  Box3d b;
-  for (const Vec3d& v : m.vertices) b.add(v);
-  const Vec3d e = b.extent();
   std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-0.1, 1.1), s(-1, 1);
-  std::vector<Vec3d> q;
-  for (std::size_t i = 0; i < n; ++i) q.push_back({b.lo.x + u(rng) * e.x, b.lo.y + u(rng) * e.y, b.lo.z + u(rng) * e.z});
-  const double h = 0.01 * b.diagonal();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3d& v = m.vertices[rng() % m.vertices.size()];
-    q.push_back({v.x + h * s(rng), v.y + h * s(rng), v.z + h * s(rng)});
-  }
-  return q;
+  return bvhbench::test::box_and_near_vertex_points(m, n, rng);
 }
 
 /// What a query answered, in world coordinates.

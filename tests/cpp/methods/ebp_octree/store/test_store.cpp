@@ -65,18 +65,11 @@ bool bits_eq(const Vec3d& a, const Vec3d& b) { return bits_eq(a.x, b.x) && bits_
 
 /// Query points: random in the enlarged box, near the vertices, and a smooth path (haptic-like).
 std::vector<Vec3d> query_points(const bvhbench::Mesh& m, std::size_t n) {
+  std::mt19937_64 rng(7);
+  std::vector<Vec3d> q = bvhbench::test::box_and_near_vertex_points(m, n, rng);
   Box3d b;
   for (auto& v : m.vertices) b.add(v);
   const Vec3d e = b.extent();
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-0.1, 1.1), s(-1, 1);
-  std::vector<Vec3d> q;
-  for (std::size_t i = 0; i < n; ++i) q.push_back({b.lo.x + u(rng) * e.x, b.lo.y + u(rng) * e.y, b.lo.z + u(rng) * e.z});
-  const double h = 0.01 * b.diagonal();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3d& v = m.vertices[rng() % m.vertices.size()];
-    q.push_back({v.x + h * s(rng), v.y + h * s(rng), v.z + h * s(rng)});
-  }
   q.push_back(m.vertices[0]);  // exactly on the surface
   Vec3d c = (b.lo + b.hi) * 0.5;
   for (std::size_t i = 0; i < n; ++i) {  // a slow walk
