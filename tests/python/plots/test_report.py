@@ -25,7 +25,9 @@ import fmt  # noqa: E402
 import metrics  # noqa: E402
 import results_io  # noqa: E402
 
-EXPECTED_CHARTS = list(charts.CHARTS)
+# The fixture is a run on one thread: the thread-scaling chart is drawn and checked from a suite
+# with a thread axis in tests/python/harness/test_threads.py.
+EXPECTED_CHARTS = [name for name in charts.CHARTS if name != "thread_scaling"]
 STRESS_CASES = {"spot_open", "stress_nonmanifold_edges", "stress_single_triangle", "stress_empty"}
 
 
@@ -92,7 +94,10 @@ def test_report_md_shows_every_chart(report):
     md = read(report / "report.md")
     for name in EXPECTED_CHARTS:
         assert f"]({name}.png)" in md, f"report.md does not show {name}"
-    assert "Not drawn" not in md and "failed to draw" not in md
+    # Every chart the fixture has data for is drawn; the thread-scaling one says why it is not.
+    not_drawn = [line for line in md.splitlines() if "Not drawn" in line]
+    assert len(not_drawn) <= 1 and all("thread" in line for line in not_drawn), not_drawn
+    assert "failed to draw" not in md
 
 
 def test_report_states_machine_and_run(report):
