@@ -89,6 +89,13 @@ ChildOutcome run_child(const std::vector<std::string>& args, const ChildLimits& 
       out.timed_out = true;
       kill(-pid, SIGKILL);
     }
+    if (limits.outlive_no_longer_than > 0 && getppid() != limits.outlive_no_longer_than) {
+      // Whoever started us is gone (a Dask worker killed mid-job): nobody will read the result,
+      // so the job must not run on to its time limit.
+      kill(-pid, SIGKILL);
+      waitpid(pid, &st, 0);
+      break;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(el < 2 ? 5 : 50));
   }
   g_child = 0;

@@ -3,6 +3,7 @@
 /// a crash, a hang or a blow-up of what it runs (a job, a query generator, the oracle) ends the
 /// child, not the caller. Linux: fork/exec, a process group, PR_SET_PDEATHSIG, RLIMIT_AS.
 #include <string>
+#include <sys/types.h>
 #include <vector>
 
 namespace bvhbench {
@@ -10,6 +11,10 @@ namespace bvhbench {
 struct ChildLimits {
   double timeout_s = 600;         ///< wall clock; the child's process group is SIGKILLed after it
   double memory_limit_mb = 0;     ///< RLIMIT_AS in MiB; 0 (or beyond what rlim_t holds): none
+  /// When > 0: the process whose death ends the job (its process group is SIGKILLed and
+  /// run_child returns as if killed). The runner's parent-death signal is the first line; this
+  /// check, made at every poll, is the one that does not depend on which thread started us.
+  pid_t outlive_no_longer_than = 0;
 };
 
 /// How a child ended.

@@ -105,7 +105,8 @@ def run_job_on_worker(exe, args, inputs, timeout_s, memory_limit_mb):
         result_path = os_.path.join(tmp, "result.json")
         log_path = os_.path.join(tmp, "job.log")
         cmd = [exe, "--quiet", "run-child", "--timeout", repr(float(timeout_s)),
-               "--memory-limit", repr(float(memory_limit_mb)), "--log", log_path, "--",
+               "--memory-limit", repr(float(memory_limit_mb)), "--log", log_path,
+               "--parent-pid", str(os_.getpid()), "--",
                exe, *args, "--out", result_path]
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 start_new_session=True)
