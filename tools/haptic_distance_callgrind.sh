@@ -6,7 +6,7 @@
 # BVHBENCH the runner (build/bvhbench, or a variant of it), QUERIES a set of `bvhbench queries
 # --kind haptic`. For each METHOD (default: ebp_octree:coherent=true ebp_octree
 # embree:coherent=true) one `bvhbench run --query distance --repeat 1` under callgrind, collecting
-# only inside the adapter's distance method (`--toggle-collect`), so that the build and the
+# only inside the method's `distance` (`SharedStructureMethod<EbpQueries>`, `<EbpOocQueries>`, `<EmbreeQueries>`) (`--toggle-collect`), so that the build and the
 # harness are left out; then `callgrind_annotate --inclusive=yes --threshold=100` into
 # OUTDIR/NAME__METHOD.txt (and with `--tree=caller`, call counts per caller, into .tree.txt) and
 # the run's result (counters per query) into OUTDIR/NAME__METHOD.json. --repeat 1 is a warm-up
@@ -21,8 +21,9 @@ METHODS=("$@")
 mkdir -p "$OUT"
 for M in "${METHODS[@]}"; do
   case $M in
-    ebp_octree*) FN='bvhbench::(anonymous namespace)::EbpOctreeMethod::distance(' ;;
-    embree*) FN='bvhbench::(anonymous namespace)::Embree::distance(' ;;
+    ebp_octree*store=*) FN='bvhbench::SharedStructureMethod<bvhbench::(anonymous namespace)::EbpOocQueries>::distance(' ;;
+    ebp_octree*) FN='bvhbench::SharedStructureMethod<bvhbench::(anonymous namespace)::EbpQueries>::distance(' ;;
+    embree*) FN='bvhbench::SharedStructureMethod<bvhbench::(anonymous namespace)::EmbreeQueries>::distance(' ;;
     *) echo "unknown method $M" >&2; exit 2 ;;
   esac
   TAG="${NAME}__${M//[:=,]/_}"
@@ -33,5 +34,6 @@ for M in "${METHODS[@]}"; do
   callgrind_annotate --inclusive=yes --threshold=100 "$OUT/$TAG.cg" > "$OUT/$TAG.txt"
   callgrind_annotate --inclusive=yes --threshold=100 --tree=caller "$OUT/$TAG.cg" > "$OUT/$TAG.tree.txt"
   TOTAL=$(awk '/PROGRAM TOTALS/{gsub(",","",$1); print $1; exit}' "$OUT/$TAG.txt")
+  [ "$TOTAL" != "." ] || { echo "$TAG: nothing collected: is ${FN}* still the adapter's name?" >&2; exit 1; }
   echo "$TAG total_Ir=$TOTAL"
 done

@@ -38,6 +38,10 @@ std::vector<ParamSpec> ebp_params() {
       {"certificate", ParamType::boolean, "true",
        "coherent distance: answer from a certificate (the triangles near the last renewal) while the probe "
        "stays in its ball; same answers", {}},
+      {"certificate_policy", ParamType::choice, "auto",
+       "coherent distance with certificate: auto = certificates where their work per query (from the counters) "
+       "is below a plain search's, plain streaks elsewhere; always = a certificate at every renewal; same answers",
+       {"auto", "always"}},
       {"chained_sign", ParamType::boolean, "true",
        "coherent distance on closed meshes: the previous query's sign when the probe stays within its "
        "distance of it (no inside test); same answers", {}},
@@ -137,9 +141,10 @@ namespace {
 /// One thread's queries: an ebp::Query (its stamps, path state and counters) over the shared tree.
 class EbpQueries final : public QueryState {
  public:
-  EbpQueries(const ebp::Octree& tree, bool coherent, bool certificate, bool chained_sign)
+  EbpQueries(const ebp::Octree& tree, bool coherent, bool certificate, bool adaptive, bool chained_sign)
       : tree_(tree), query_(tree, coherent) {
     query_.set_certificate(certificate);
+    query_.set_adaptive_certificate(adaptive);
     query_.set_chained_sign(chained_sign);
   }
   // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
@@ -177,6 +182,7 @@ class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
  private:
   std::unique_ptr<EbpQueries> make_state() const override {
     return std::make_unique<EbpQueries>(tree_, coherent_, params_.get_bool("certificate"),
+                                        params_.get("certificate_policy") == "auto",
                                         params_.get_bool("chained_sign"));
   }
   Params params_;

@@ -30,9 +30,10 @@ namespace {
 class EbpOocQueries final : public QueryState {
  public:
   EbpOocQueries(std::shared_ptr<const ebp::StoreReader> store, std::size_t cache_bytes, bool coherent, bool cold,
-                bool certificate, bool chained_sign)
+                bool certificate, bool adaptive, bool chained_sign)
       : ooc_(std::move(store), cache_bytes, coherent, cold) {
     ooc_.set_certificate(certificate);
+    ooc_.set_adaptive_certificate(adaptive);
     ooc_.set_chained_sign(chained_sign);
   }
   bool inside(const Vec3d& p) override { return ooc_.inside(p); }
@@ -60,6 +61,7 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
         cold_(p.get_bool("cold")),
         coherent_(p.get_bool("coherent")),
         certificate_(p.get_bool("certificate")),
+        adaptive_(p.get("certificate_policy") == "auto"),
         chained_sign_(p.get_bool("chained_sign")) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
@@ -100,12 +102,12 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
 
  private:
   std::unique_ptr<EbpOocQueries> make_state() const override {
-    return std::make_unique<EbpOocQueries>(store_, thread_cache_bytes_, coherent_, cold_, certificate_,
+    return std::make_unique<EbpOocQueries>(store_, thread_cache_bytes_, coherent_, cold_, certificate_, adaptive_,
                                            chained_sign_);
   }
   std::string path_;
   std::size_t cache_bytes_, thread_cache_bytes_ = 0;
-  bool cold_, coherent_, certificate_, chained_sign_;
+  bool cold_, coherent_, certificate_, adaptive_, chained_sign_;
   std::shared_ptr<const ebp::StoreReader> store_;
 };
 

@@ -30,7 +30,27 @@ inline constexpr double kFloorFactor = 0.5;
 inline constexpr unsigned kStepWindow = 8;
 inline constexpr double kAheadFactor = 0.8;
 inline constexpr double kGrowth = 2.0;
-inline constexpr unsigned kBackOff = 8;
+
+/// The path's choice between certificates and plain searches is made on *work units*, a proxy of
+/// instructions from the query's own counters (input alone sets them, so the choice is the same
+/// on every machine): in a search an exact triangle test ~220 instructions, a plane, box or
+/// triangle pre-test ~40, a node ~80; in a certificate's scan a member's 8-wide bound ~6.
+struct Work {
+  std::uint64_t triangles = 0, planes = 0, nodes = 0;
+};
+inline Work work_of(const QueryCounters& c) { return {c.triangles_tested, c.planes_tested, c.nodes_visited}; }
+inline double search_work(const Work& a, const Work& b) {
+  return 220.0 * double(b.triangles - a.triangles) + 40.0 * double(b.planes - a.planes) + 80.0 * double(b.nodes - a.nodes);
+}
+inline double scan_work(const Work& a, const Work& b) {
+  return 220.0 * double(b.triangles - a.triangles) + 6.0 * double(b.planes - a.planes);
+}
+/// A renewal's collection besides its search: ~350 instructions per triangle offered (copied,
+/// kept in the K-nearest heap), ~550 more per member of S (its bound's coefficients packed).
+inline double collection_work(std::uint32_t offered, std::uint32_t kept) { return 350.0 * offered + 550.0 * kept; }
+/// Plain searches in a row when certificates cost more per query than plain searches: the
+/// first streak, and the longest (each losing trial doubles it; a winning one resets it).
+inline constexpr unsigned kPlainStreakMin = 16, kPlainStreakMax = 1024;
 
 /// The rule's constants (a struct so that a measurement can vary them in one place).
 struct CertificateRule {
@@ -87,6 +107,9 @@ class DistanceCertificate {
   CertifiedHit serve(const Vec3d& q, QueryCounters& c);
   void clear() { valid_ = false; }
   std::uint32_t size() const { return std::uint32_t(members_.size()); }
+  /// How many triangles the last renewal offered (the collection's work: each is copied, and the
+  /// kept ones packed).
+  std::uint32_t offered() const { return offered_; }
   double r() const { return r_; }
 
  private:
@@ -128,6 +151,7 @@ class DistanceCertificate {
   std::vector<Directions> directions_ = std::vector<Directions>(kDirectionSlots);
   std::vector<float> pack_;  ///< blocks x kScanRows x kScanLanes
   std::vector<std::uint8_t> masks_;
+  std::uint32_t offered_ = 0;
   std::uint32_t current_ = 0;  ///< S's last winner: tested first, its distance the running best
 };
 
@@ -143,20 +167,26 @@ class CertifiedPath {
   /// along the last step, by kAheadFactor x the last certificate's radius, so that the probe
   /// crosses the ball instead of starting at its centre (fewer renewals on a straight slide).
   Vec3d ahead(const Vec3d& q) const;
-  /// Records the renewal just finished (its radius sets the next offset).
+  /// Records the renewal just finished (its radius sets the next offset); its account opens.
   void renewed() {
     last_r_ = cert.r();
-    served_ = 0;
+    account_open_ = true;
   }
-  void served() { ++served_; }
-  /// A probe that leaves each ball at once (a jittery walk, not a slide) makes every renewal a
-  /// loss: when a certificate served no query, the next kBackOff queries are plain searches.
-  bool backing_off() {
-    if (served_ == 0 && cert.valid() && backoff_ == 0) backoff_ = kBackOff;
-    if (backoff_ == 0) return false;
-    if (--backoff_ == 0) cert.clear();  // then renew afresh
-    return true;
+  /// The work of one query the current certificate answered (its renewal's included).
+  void certificate_answered(double work) {
+    account_work_ += work;
+    ++account_queries_;
   }
+  /// The work of one plain search.
+  void plain_answered(double work) { plain_work_ = plain_work_ < 0 ? work : plain_work_ + (work - plain_work_) / 8; }
+  /// When p has left the certificate's ball: whether to answer it by a plain search instead of a
+  /// renewal. Certificates lose where the probe leaves each ball within a few queries (a
+  /// jittery walk; triangles a few steps wide, whose renewal costs several searches): while
+  /// their work per query answered exceeds a plain search's, the path runs streaks of plain
+  /// searches (16, doubling up to 1024), each followed by one trial certificate.
+  bool prefer_plain();
+  /// false: a renewal whenever p leaves the ball (no plain streaks; tests of the certificate).
+  void set_adaptive(bool on) { adaptive_ = on; }
   /// r_max, r_floor for a renewal at the current point; false while no step is known.
   bool radii(double* r_max, double* r_floor) const;
   /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
@@ -174,7 +204,14 @@ class CertifiedPath {
   bool have_prev_ = false;
   Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
   double last_r_ = 0;
-  unsigned served_ = 0, backoff_ = 0;
+  /// Closes the current certificate's account: its work per query into cert_work_.
+  void close_account();
+  // the choice between certificates and plain searches (prefer_plain): estimates of the work
+  // per query (-1: none yet), the open certificate's account, the plain streak
+  double plain_work_ = -1, cert_work_ = -1, account_work_ = 0;
+  unsigned account_queries_ = 0;
+  bool account_open_ = false, trial_ = false, fresh_ = false, adaptive_ = true;
+  unsigned plain_left_ = 0, streak_ = kPlainStreakMin;
   double steps_[kStepWindow] = {};
   unsigned nsteps_ = 0, next_ = 0;
   bool sign_ok_ = false, sign_in_ = false;
@@ -187,20 +224,29 @@ class CertifiedPath {
 /// path.ahead(p): begin(), then `renew(cert, centre)` runs the tree's branch and bound at the
 /// centre with `cert` as its collector, then finish(), and p is served from the new certificate
 /// (or, if its ball turned out too small to hold p, answered by `plain()`); else (the path's
-/// first point) `plain()`, the branch and bound alone. On a certified answer *site is where its
+/// first point, or a plain streak: CertifiedPath::prefer_plain) `plain()`, the branch and bound
+/// alone. `work_now()` gives the Work counted so far by every search and scan of this query
+/// state (the choice between certificates and plain searches weighs it). On a certified answer *site is where its
 /// triangle was found (the next renewal's seed). The tree's root cube: root_lo, root_size.
-template <class Renew, class Plain>
+template <class WorkNow, class Renew, class Plain>
 DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d& root_lo, double root_size,
-                               QueryCounters& c, TriangleSite* site, Renew&& renew, Plain&& plain) {
+                               QueryCounters& c, TriangleSite* site, WorkNow&& work_now, Renew&& renew,
+                               Plain&& plain) {
   path.step_to(p);
+  const Work w0 = work_now();
+  auto searched = [&] {
+    const DistanceAnswer a = plain();
+    path.plain_answered(search_work(w0, work_now()));
+    return a;
+  };
   CertifiedHit h;
   double r_max, r_floor;
   if (path.cert.covers(p)) {
     ++c.certificate_served;
-    path.served();
     h = path.cert.serve(p, c);
-  } else if (path.backing_off()) {
-    return plain();
+    path.certificate_answered(scan_work(w0, work_now()));
+  } else if (path.prefer_plain()) {
+    return searched();
   } else if (path.radii(&r_max, &r_floor)) {
     const Vec3d centre = path.ahead(p);
     path.cert.begin(centre, r_max, r_floor, certificate_tol(centre, root_lo, root_size));
@@ -208,13 +254,19 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d&
     ++c.certificate_renewals;
     if (!path.cert.finish(&h)) return DistanceAnswer{};  // cannot happen: the mesh has a triangle
     path.renewed();
+    const double collected = collection_work(path.cert.offered(), path.cert.size());
     if (!(centre == p)) {
-      if (!path.cert.covers(p)) return plain();
+      if (!path.cert.covers(p)) {  // the renewal's cost is the certificate's all the same
+        const DistanceAnswer a = plain();
+        path.certificate_answered(search_work(w0, work_now()) + collected);
+        return a;
+      }
       h = path.cert.serve(p, c);
     }
+    path.certificate_answered(search_work(w0, work_now()) + collected);
   } else {
     path.cert.clear();
-    return plain();
+    return searched();
   }
   *site = h.site;
   DistanceAnswer r;

@@ -28,6 +28,8 @@ Query::Query(Query&&) noexcept = default;
 
 void Query::set_scan_kernel(ScanKernel k) { path_->cert.set_kernel(k); }
 
+void Query::set_adaptive_certificate(bool on) { path_->set_adaptive(on); }
+
 void Query::reset_path() {
   path_->reset();
   last_node_ = UINT32_MAX;

@@ -82,6 +82,9 @@ class Query {
   /// probe stays in the ball where no surface is (closed meshes). Answers do not change.
   void set_certificate(bool on) { certificate_ = on; }
   void set_chained_sign(bool on) { chained_sign_ = on; }
+  /// true (default): certificates only where they cost less per query than plain searches
+  /// (CertifiedPath::prefer_plain); false: always a certificate on the coherent path.
+  void set_adaptive_certificate(bool on);
   /// The certificate's pre-test kernel (tests force the scalar one; must be supported).
   void set_scan_kernel(ScanKernel k);
   QueryCounters counters;

@@ -144,6 +144,7 @@ class Query::DistanceSearch {
     const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
     if (B.collect) {  // a certificate's renewal: the collector keeps it and sets the prune radius
       B.best = B.collect->offer(d2, q, key, t, TriangleSite{B.collect_page, k, leaf, scan_node});
+      B.best2 = B.best * B.best;  // the prune radius, for the triangles' box test
       lim2 = (B.best + tol) * (B.best + tol);
       return;
     }
@@ -438,7 +439,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
 DistanceAnswer Query::certified_distance(const Vec3d& p) {
   TriangleSite site;
   const DistanceAnswer r = certified_query(
-      *path_, p, t_.root_lo, t_.root_size, counters, &site,
+      *path_, p, t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         DistanceBest b;
         b.collect = &cert;

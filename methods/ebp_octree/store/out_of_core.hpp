@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "methods/ebp_octree/store/page_cache.hpp"
+#include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/reader.hpp"
@@ -34,6 +35,7 @@ class OutOfCore {
   /// As Query's: the certificate and the chained sign on the coherent path (on by default).
   void set_certificate(bool on) { certificate_ = on; }
   void set_chained_sign(bool on) { chained_sign_ = on; }
+  void set_adaptive_certificate(bool on);  ///< as Query::set_adaptive_certificate
   void set_scan_kernel(ScanKernel k);
 
   QueryCounters counters() const;  ///< page queries + the top-tree traversal
@@ -55,6 +57,7 @@ class OutOfCore {
   double root_size_;
   int leaf_level_;
   QueryCounters top_counters_;
+  Work page_work_;  ///< the pages' queries' work, summed as it is done (the certificate's choice)
   std::vector<std::uint64_t> page_stamp_;
   std::uint64_t query_id_ = 0;
   // coherent: page, LeafTri index and leaf (in that page) of the previous closest triangle

@@ -65,6 +65,7 @@ QueryCounters expect_certified_path(const Octree& t, const std::vector<Vec3d>& p
                                     const Reference* ref = nullptr, ScanKernel kernel = best_scan_kernel()) {
   Query cert(t, true), plain(t, true);
   cert.set_scan_kernel(kernel);
+  cert.set_adaptive_certificate(false);  // the certificate at every renewal: it is what is tested
   plain.set_certificate(false);
   plain.set_chained_sign(false);
   for (std::size_t i = 0; i < path.size(); ++i) {
@@ -112,6 +113,54 @@ TEST(EbpCertificate, HapticPathsOnRealMeshesAreBitIdentical) {
     EXPECT_GT(c.certificate_served, path.size() / 2) << name;
     if (t.closed) {
       EXPECT_GT(c.signs_chained, path.size() / 2) << name;
+    }
+  }
+}
+
+// The choice between certificates and plain searches (certificate_policy auto, the default): on
+// a slide (the harness's haptic path) certificates answer most queries; on a path that jumps
+// between two far places at every query, every certificate is lost at once, and plain streaks
+// answer most queries with a fraction of the renewals that a certificate at every renewal makes;
+// the answers are the plain search's either way, and the choice, made on counters, is the same
+// pass after pass.
+TEST(EbpCertificate, AutoPolicyUsesCertificatesWhereTheyPay) {
+  const Mesh m = bvhbench::load_mesh(shared_mesh("cow.obj"));
+  const Octree t = build(m);
+  {
+    const auto slide = haptic(m, 3000);
+    Query q(t, true);
+    for (const Vec3d& p : slide) q.distance(p);
+    EXPECT_GT(q.counters.certificate_served, slide.size() * 8 / 10);
+  }
+  const Reference ref(m.vertices, m.triangles);
+  const Vec3d a = ref.v[ref.f[0][0]], b = ref.v[ref.f[ref.f.size() / 2][1]];
+  const double cell = t.cell_size(t.leaf_level);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-0.05 * cell, 0.05 * cell);
+  std::vector<Vec3d> jumps;
+  for (int i = 0; i < 2000; ++i) jumps.push_back((i % 2 ? a : b) + Vec3d(u(rng), u(rng), u(rng)));
+  Query autop(t, true), always(t, true), plain(t, true);
+  always.set_adaptive_certificate(false);
+  plain.set_certificate(false);
+  QueryCounters first;
+  for (int pass = 0; pass < 2; ++pass) {
+    autop.reset_path();
+    autop.counters = {};
+    always.reset_path();
+    plain.reset_path();
+    for (std::size_t i = 0; i < jumps.size(); ++i) {
+      const DistanceAnswer x = autop.distance(jumps[i]), y = always.distance(jumps[i]), z = plain.distance(jumps[i]);
+      ASSERT_EQ(differs(x, z), "") << "auto, query " << i;
+      ASSERT_EQ(differs(y, z), "") << "always, query " << i;
+    }
+    if (pass == 0) {
+      first = autop.counters;
+      EXPECT_LT(autop.counters.certificate_renewals * 4, always.counters.certificate_renewals);
+      EXPECT_GT(always.counters.certificate_renewals, jumps.size() / 2);
+    } else {
+      EXPECT_EQ(autop.counters.certificate_renewals, first.certificate_renewals);
+      EXPECT_EQ(autop.counters.triangles_tested, first.triangles_tested);
+      EXPECT_EQ(autop.counters.planes_tested, first.planes_tested);
     }
   }
 }
