@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""The EBP-Octree's headline table against Embree, from a run of suites/headline.yml.
+
+    .venv/bin/python tools/headline_table.py results/headline [--markdown]
+
+Per model: the haptic distance (coherent EBP-Octree with its default certificate policy, with
+the certificate at every renewal, without it, and Embree's coherent variant), inside on the
+haptic path (not coherent and coherent) and on random points, each as the median pass's
+throughput and the ratio to Embree measured in the same run; then the structure's bytes per
+triangle, and the out-of-core rows (throughput, p99.9 latency, peak RSS). Targets beside them
+(the EBP-Octree's headline issue): distance >= 2x Embree coherent; inside haptic >= 1x Embree
+without coherence and >= 2x with; inside random >= 2x from 1M triangles; bytes <= Embree's;
+out of core >= 1 MHz, p99.9 < 1 ms, RSS < 400 MiB.
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def load(out: Path):
+    rows = []
+    for f in sorted((out / "runs").glob("*.json")):
+        try:
+            r = json.loads(f.read_text())
+        except ValueError:
+            continue
+        rows.append(r)
+    return rows
+
+
+def key(r):
+    j = r["job"]
+    return (Path(j["mesh"]["path"]).stem, j["queries"]["kind"], j["query"], j["method_spec"])
+
+
+def rate(r):
+    if r.get("status") != "ok":
+        return None
+    return r["queries"]["throughput_qps"]["median"]
+
+
+def fmt_rate(q):
+    if q is None:
+        return "—"
+    return f"{q / 1e6:.2f} M" if q >= 1e6 else f"{q / 1e3:.0f} k"
+
+
+def fmt_ratio(a, b, target=None):
+    if a is None or b is None or b == 0:
+        return "—"
+    x = a / b
+    mark = "" if target is None else (" ✔" if x >= target else " ✘")
+    return f"{x:.2f}×{mark}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[1])
+    ap.add_argument("results", type=Path)
+    args = ap.parse_args()
+    rows = load(args.results)
+    if not rows:
+        sys.exit(f"{args.results}: no results in runs/")
+    by = {key(r): r for r in rows}
+    models = []
+    for r in rows:
+        m = Path(r["job"]["mesh"]["path"]).stem
+        if m not in models:
+            models.append(m)
+    models.sort(key=lambda m: next(r["job"]["mesh"]["triangles"] for r in rows if Path(r["job"]["mesh"]["path"]).stem == m))
+
+    def q(m, kind, query, spec):
+        return rate(by[(m, kind, query, spec)]) if (m, kind, query, spec) in by else None
+
+    print("| model (triangles) | EBP haptic distance (auto) | always | plain | Embree coherent | auto / Embree (≥ 2×) "
+          "| EBP inside haptic / Embree (≥ 1×) | coherent / coherent (≥ 2×) | inside random / Embree (≥ 2× from 1M) "
+          "| bytes / triangle EBP, Embree |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for m in models:
+        tris = next(r["job"]["mesh"]["triangles"] for r in rows if Path(r["job"]["mesh"]["path"]).stem == m)
+        d_auto = q(m, "haptic", "distance", "ebp_octree:coherent=true")
+        d_always = q(m, "haptic", "distance", "ebp_octree:coherent=true,certificate_policy=always")
+        d_plain = q(m, "haptic", "distance", "ebp_octree:coherent=true,certificate=false")
+        d_emb = q(m, "haptic", "distance", "embree:coherent=true")
+        i_ebp = q(m, "haptic", "inside", "ebp_octree")
+        i_emb = q(m, "haptic", "inside", "embree")
+        ic_ebp = q(m, "haptic", "inside", "ebp_octree:coherent=true")
+        ic_emb = q(m, "haptic", "inside", "embree:coherent=true")
+        ir_ebp = q(m, "random", "inside", "ebp_octree")
+        ir_emb = q(m, "random", "inside", "embree")
+        eb = by.get((m, "random", "inside", "ebp_octree")) or by.get((m, "haptic", "distance", "ebp_octree:coherent=true"))
+        em = by.get((m, "random", "inside", "embree")) or by.get((m, "haptic", "distance", "embree:coherent=true"))
+
+        def bpt(r):
+            try:
+                return f"{r['memory']['structure_bytes'] / tris:.1f}"
+            except (TypeError, KeyError):
+                return "—"
+
+        print(f"| {m} ({tris:,}) | {fmt_rate(d_auto)} | {fmt_rate(d_always)} | {fmt_rate(d_plain)} | {fmt_rate(d_emb)} "
+              f"| {fmt_ratio(d_auto, d_emb, 2)} | {fmt_ratio(i_ebp, i_emb, 1)} | {fmt_ratio(ic_ebp, ic_emb, 2)} "
+              f"| {fmt_ratio(ir_ebp, ir_emb, 2 if tris >= 1_000_000 else None)} | {bpt(eb)}, {bpt(em)} |")
+
+    ooc = [r for r in rows if r["job"]["params"].get("store")]
+    if ooc:
+        print()
+        print("| out of core (256 MiB cache) | query | throughput (≥ 1 MHz) | p50 | p99.9 (< 1 ms) | RSS querying (< 400 MiB) |")
+        print("|---|---|---:|---:|---:|---:|")
+        for r in sorted(ooc, key=lambda r: (r["job"]["query"], str(r["job"]["params"].get("cold")))):
+            j = r["job"]
+            cold = "cold" if str(j["params"].get("cold")).lower() == "true" else "warm"
+            if r.get("status") != "ok":
+                print(f"| {Path(j['mesh']['path']).stem}, {cold} | {j['query']} | {r.get('status')} | | | |")
+                continue
+            lat = r["queries"]["latency_ns"] or {}
+            # The RSS while querying: the job also loads the mesh once, to check the store against it.
+            rss = r.get("memory", {}).get("query_rss_bytes")
+            print(f"| {Path(j['mesh']['path']).stem}, {cold} | {j['query']} | {fmt_rate(rate(r))} "
+                  f"| {lat.get('p50', 0) / 1e3:.2f} µs | {lat.get('p999', 0) / 1e3:.1f} µs "
+                  f"| {rss / 2**20:.0f} MiB |" if rss else "| — |")
+
+
+if __name__ == "__main__":
+    main()
