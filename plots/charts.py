@@ -366,6 +366,8 @@ def _cfg_handle(cfg):
 
 
 def _cfg_linestyle(cfg):
+    if "store=" in cfg[1]:  # out of core: the same method's other storage
+        return "-."
     return "--" if is_coherent(cfg[1]) else "-"
 
 
@@ -591,8 +593,13 @@ def thread_scaling(rs):
                     key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), p[1] != "inside", _kind_key(p[2])))
     panels = panels[:MAX_PANELS]
     fig, axes = _grid(len(panels), max_cols=2)
-    configs = sorted({(j.method, j.params_key) for j in jobs if (j.mesh, j.query, j.kind, j.config) in scaled},
+    # Every configuration run on these panels' model and queries: also those that ran on one
+    # thread only (a method that does not declare concurrent queries has `unsupported` rows for
+    # T > 1), drawn as a point, so that the chart shows every method of the suite.
+    on_panels = set(panels)
+    configs = sorted({(j.method, j.params_key) for j in jobs if (j.mesh, j.query, j.kind) in on_panels},
                      key=lambda c: (method_sort_key(c[0]), c[1]))
+    one_thread_only = set()
     cores = {int(c) for c in (j.num("context.cores") for j in jobs) if c}
     for ax, (mesh, query, kind) in zip(axes, panels):
         all_t = set()
@@ -604,6 +611,11 @@ def thread_scaling(rs):
                 by_t.setdefault(j.threads, []).append(
                     (j.qps, j.num("queries.threads.single_thread_qps.median")))
             if not any(t > 1 for t in by_t):
+                if 1 in by_t:
+                    ax.plot([1], [median([q for q, _ in by_t[1]])], color=method_color(cfg[0]),
+                            marker=method_marker(cfg[0]), linestyle="none", markersize=7, zorder=2)
+                    one_thread_only.add(cfg)
+                    all_t.add(1)
                 continue
             ts = sorted(by_t)
             ys = [median([q for q, _ in by_t[t]]) for t in ts]
@@ -633,7 +645,13 @@ def thread_scaling(rs):
         ax.set_xlabel("Query threads", fontsize=8)
         ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
         ax.set_title(_mesh_title(rs, mesh, f"{query} · {kind}"), fontsize=9)
-    handles = [_cfg_handle(c) for c in configs]
+    handles = []
+    for c in configs:
+        h = _cfg_handle(c)
+        if c in one_thread_only:
+            h.set_linestyle("none")
+            h.set_label(h.get_label() + " (one thread: no concurrent queries)")
+        handles.append(h)
     handles.append(Line2D([], [], color="#555555", linestyle=":", label="ideal: T \u00d7 one thread"))
     return _finish(fig, handles, "method")
 

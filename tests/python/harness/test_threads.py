@@ -98,3 +98,12 @@ def test_a_suite_thread_axis_and_its_chart(bvhbench, shared_meshes, tmp_path):
     report = run(sys.executable, ROOT / "plots" / "report.py", out, check=0)
     assert (out / "report" / "thread_scaling.png").exists(), report.stdout + report.stderr
     assert "Throughput against query threads" in (out / "report" / "report.md").read_text()
+    # Every method of the suite is on the chart: `fault` ran on one thread only (its T = 2 rows
+    # are unsupported) and is drawn as a point, said so in the legend.
+    sys.path.insert(0, str(ROOT / "plots"))
+    import charts
+    import results_io
+    fig = charts.thread_scaling(results_io.load(out))
+    labels = [t.get_text() for t in fig.legends[0].texts]
+    assert "embree" in labels
+    assert "fault (one thread: no concurrent queries)" in labels, labels
