@@ -105,6 +105,23 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
   return hit;
 }
 
+unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
+                                const float q_hi[3], float plane_lim, float box_lim) {
+  unsigned keep = 0;
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    const float s = t.n[0] * p[0] + t.n[1] * p[1] + t.n[2] * p[2] - t.d;
+    float sum = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float lo = std::min(std::min(t.a[a], t.b[a]), t.c[a]), hi = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
+      const float g = std::max(std::max(lo - q_hi[a], q_lo[a] - hi), 0.0f);
+      sum = sum + g * g;
+    }
+    if (!(std::fabs(s) > plane_lim) && !(sum > box_lim)) keep |= 1u << j;
+  }
+  return keep;
+}
+
 unsigned block_pass_baseline(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
   unsigned hit = 0;
 #if defined(__SSE2__)
@@ -223,6 +240,44 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
 }
 
 
+/// Four rows of 8 records at byte offset Off, transposed: lane j of out[i] = field i of record j.
+template <std::size_t Off>
+EBP_AVX2 inline void columns(const LeafTri* blk, unsigned m, __m256 out[4]) {
+  const __m256 R0 = rows<Off>(blk, m, 0), R1 = rows<Off>(blk, m, 1), R2 = rows<Off>(blk, m, 2),
+               R3 = rows<Off>(blk, m, 3);
+  const __m256 t0 = _mm256_unpacklo_ps(R0, R1), t1 = _mm256_unpackhi_ps(R0, R1);
+  const __m256 t2 = _mm256_unpacklo_ps(R2, R3), t3 = _mm256_unpackhi_ps(R2, R3);
+  out[0] = _mm256_shuffle_ps(t0, t2, 0x44);
+  out[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+  out[2] = _mm256_shuffle_ps(t1, t3, 0x44);
+  out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
+}
+
+EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
+                                     const float q_hi[3], float plane_lim, float box_lim) {
+  __m256 n[4], a[4], b[4], c[4];
+  columns<offsetof(LeafTri, n)>(blk, m, n);  // nx, ny, nz, d
+  columns<offsetof(LeafTri, a)>(blk, m, a);  // ax, ay, az (lane 3: bx, unused)
+  columns<offsetof(LeafTri, b)>(blk, m, b);
+  columns<offsetof(LeafTri, c)>(blk, m, c);
+  const __m256 s = _mm256_sub_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], _mm256_set1_ps(p[0])), _mm256_mul_ps(n[1], _mm256_set1_ps(p[1]))),
+                    _mm256_mul_ps(n[2], _mm256_set1_ps(p[2]))),
+      n[3]);
+  const __m256 abs_s = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), s);
+  __m256 sum = _mm256_setzero_ps();
+  for (int k = 0; k < 3; ++k) {
+    const __m256 lo = _mm256_min_ps(_mm256_min_ps(a[k], b[k]), c[k]), hi = _mm256_max_ps(_mm256_max_ps(a[k], b[k]), c[k]);
+    const __m256 g = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lo, _mm256_set1_ps(q_hi[k])),
+                                                 _mm256_sub_ps(_mm256_set1_ps(q_lo[k]), hi)),
+                                   _mm256_setzero_ps());
+    sum = _mm256_add_ps(sum, _mm256_mul_ps(g, g));
+  }
+  const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(abs_s, _mm256_set1_ps(plane_lim), _CMP_GT_OQ),
+                                                                _mm256_cmp_ps(sum, _mm256_set1_ps(box_lim), _CMP_GT_OQ))));
+  return ~out & low_bits(m);
+}
+
 EBP_AVX2 inline __m256d abs_pd(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
 
 EBP_AVX2 unsigned block_pass_avx2(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
@@ -289,10 +344,11 @@ EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[
 LeafKernelTable make(LeafKernels k) {
 #if defined(EBP_X86)
   if (k == LeafKernels::avx2 && cpu_has_avx2())
-    return {plane_pass_avx2, box_pass_avx2, block_pass_avx2, edge_signs_avx2, LeafKernels::avx2};
+    return {plane_pass_avx2, box_pass_avx2, block_pass_avx2, edge_signs_avx2, distance_pass_avx2, LeafKernels::avx2};
 #endif
   (void)k;
-  return {plane_pass_baseline, box_pass_baseline, block_pass_baseline, edge_signs_baseline, LeafKernels::baseline};
+  return {plane_pass_baseline, box_pass_baseline, block_pass_baseline, edge_signs_baseline, distance_pass_baseline,
+          LeafKernels::baseline};
 }
 
 LeafKernelTable& current() {
@@ -323,5 +379,17 @@ LeafKernels set_leaf_kernels(LeafKernels k) {
 }
 
 const LeafKernelTable& leaf_kernel_table() { return current(); }
+
+void float_bounds(double x, float* lo, float* hi) {
+  const float f = float(x);  // to nearest; then one step outwards where it went the other way
+  *lo = double(f) > x ? std::nextafter(f, -kInf) : f;
+  *hi = double(f) < x ? std::nextafter(f, kInf) : f;
+}
+
+void distance_prefilter_limits(double best, double best2, double eps_p, float* plane_lim, float* box_lim) {
+  float lo;
+  float_bounds((best + eps_p) * (1 + 1e-9), &lo, plane_lim);
+  float_bounds(best2 * (1 + 4e-6), &lo, box_lim);
+}
 
 }  // namespace ebp

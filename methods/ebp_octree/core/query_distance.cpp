@@ -17,6 +17,7 @@
 
 #include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 
 namespace ebp {
@@ -71,6 +72,7 @@ class Query::DistanceSearch {
     fy = float(pr.y);
     fz = float(pr.z);
     slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t_.root_size);
+    for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
   }
 
   /// The coherent start: the previous closest triangle, then its whole leaf (with its plane hint
@@ -183,12 +185,25 @@ class Query::DistanceSearch {
       const char* a = reinterpret_cast<const char*>(tris + lf.tri_begin + ord[i].second * kBlockTris);
       for (std::uint32_t l = 0; l < kBlockTris; ++l) __builtin_prefetch(a + 64 * l);
     }
+    // A block's triangles go through the pre-filter first (8 at a time: face plane and box in
+    // float, with margins), then the per-triangle tests: the filter only clears triangles that
+    // those tests prune too (leaf_kernels.hpp), so what is tested, and every counter, is the same.
+    const LeafKernelTable& kt = leaf_kernel_table();
+    const float pl[3] = {px, py, pz};
+    double limits_for = -1;
+    float plane_lim = 0, box_lim = 0;
     for (std::uint32_t i = 0; i < m; ++i) {
       if (ord[i].first > lim2) break;
       const std::uint32_t k0 = lf.tri_begin + ord[i].second * kBlockTris;
       const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
       counters.planes_tested += k1 - k0;
-      for (std::uint32_t k = k0; k < k1; ++k) {
+      if (B.best != limits_for) {  // the best moved: the limits follow it
+        distance_prefilter_limits(B.best, B.best2, eps_p, &plane_lim, &box_lim);
+        limits_for = B.best;
+      }
+      for (unsigned bits = kt.distance_pass(tris + k0, k1 - k0, pl, q_lo, q_hi, plane_lim, box_lim); bits;
+           bits &= bits - 1) {
+        const std::uint32_t k = k0 + unsigned(__builtin_ctz(bits));
         if (triangle_pruned(tris[k], px, py, pz, eps_p)) continue;
         test_triangle(k, li);
       }
@@ -401,6 +416,7 @@ class Query::DistanceSearch {
   double tol = 0;
   double lim2 = std::numeric_limits<double>::infinity();  ///< (best + tol)^2
   float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
+  float q_lo[3], q_hi[3];        ///< p rounded outwards to float (the triangle pre-filter's boxes)
   double slack = 0;
   std::uint32_t scan_node = UINT32_MAX;  ///< the node of the leaf being scanned, if known
 };

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -193,6 +194,68 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
     EXPECT_GT(edge_zero, 100u) << name;  // segments through vertices: the exact fallback ran
     EXPECT_GT(nonzero, blocks) << name;
   }
+  if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
+}
+
+// The distance pre-filter: both kernels give the same mask, and a triangle it clears is strictly
+// farther than the best it was given (exact closest point in double), for points in and around
+// the leaf, on vertices, and bests from 0 to beyond the block's nearest triangle.
+TEST(EbpLeafKernels, DistancePrefilterClearsOnlyTrianglesFartherThanTheBest) {
+  KernelsGuard g;
+  std::vector<LeafKernels> kinds{LeafKernels::baseline};
+  if (cpu_has_avx2()) kinds.push_back(LeafKernels::avx2);
+  std::size_t cleared = 0, kept = 0;
+  for (const char* name : {"cow.obj", "fandisk.obj"}) {
+    const Mesh m = bvhbench::load_mesh(shared_mesh(name));
+    const Octree t = build(m);
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> U(-1.5, 1.5);
+    for (const Leaf& lf : t.leaves) {
+      const double half = 0.5 * t.cell_size(t.leaf_level);
+      for (std::uint32_t k = 0; k < lf.tri_count; k += kBlockTris) {
+        const LeafTri* blk = t.tris.data() + lf.tri_begin + k;
+        const unsigned n = std::min(lf.tri_count - k, kBlockTris);
+        for (int i = 0; i < 4; ++i) {
+          const Vec3d c = to_d(lf.centre);
+          const Vec3d q = i < 3 ? c + Vec3d(U(rng), U(rng), U(rng)) * half : to_d(blk[rng() % n].b);
+          double d[8], nearest = std::numeric_limits<double>::infinity();
+          for (unsigned j = 0; j < n; ++j) {
+            d[j] = norm(bvhbench::closest_point_on_triangle(q, to_d(blk[j].a), to_d(blk[j].b), to_d(blk[j].c)) - q);
+            nearest = std::min(nearest, d[j]);
+          }
+          // p in the leaf's frame and eps_p as the distance search computes them
+          const float p[3] = {float(q.x - double(lf.centre[0])), float(q.y - double(lf.centre[1])),
+                              float(q.z - double(lf.centre[2]))};
+          const double eps_p = double(lf.eps) + 1e-6 * (double(std::fabs(p[0])) + double(std::fabs(p[1])) +
+                                                        double(std::fabs(p[2])));
+          float q_lo[3], q_hi[3];
+          for (int a = 0; a < 3; ++a) float_bounds(q[a], &q_lo[a], &q_hi[a]);
+          for (double best : {0.0, 0.5 * nearest, nearest, 1.5 * nearest + 0.1 * half}) {
+            float plane_lim, box_lim;
+            distance_prefilter_limits(best, best * best, eps_p, &plane_lim, &box_lim);
+            unsigned first = 0;
+            for (LeafKernels kind : kinds) {
+              set_leaf_kernels(kind);
+              const unsigned mask = leaf_kernel_table().distance_pass(blk, n, p, q_lo, q_hi, plane_lim, box_lim);
+              if (kind == kinds.front()) first = mask;
+              ASSERT_EQ(mask, first) << name << ": the kernels differ";
+              ASSERT_EQ(mask & ~((1u << n) - 1u), 0u);
+            }
+            for (unsigned j = 0; j < n; ++j) {
+              if (first >> j & 1u) {
+                ++kept;
+              } else {
+                ++cleared;
+                ASSERT_GT(d[j], best) << name << ": cleared a triangle within the best";
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(cleared, kept / 4);  // the filter does clear (the test is not vacuous)
+  EXPECT_GT(kept, 0u);
   if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
 }
 
