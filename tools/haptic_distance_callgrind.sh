@@ -26,7 +26,7 @@ for M in "${METHODS[@]}"; do
     embree*) FN='bvhbench::SharedStructureMethod<bvhbench::(anonymous namespace)::EmbreeQueries>::distance(' ;;
     *) echo "unknown method $M" >&2; exit 2 ;;
   esac
-  TAG="${NAME}__${M//[:=,]/_}"
+  TAG="${NAME}__${M//[:=,\/]/_}"  # a store path's slashes too
   valgrind --tool=callgrind --collect-atstart=no --toggle-collect="${FN}*" \
     --callgrind-out-file="$OUT/$TAG.cg" \
     "$B" run --mesh "$MESH" --method "$M" --queries "$Q" --query distance --repeat 1 --quiet \
