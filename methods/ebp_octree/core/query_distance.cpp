@@ -72,7 +72,6 @@ class Query::DistanceSearch {
     fy = float(pr.y);
     fz = float(pr.z);
     slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + t_.root_size);
-    for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
   }
 
   /// The coherent start: the previous closest triangle, then its whole leaf (with its plane hint
@@ -190,6 +189,10 @@ class Query::DistanceSearch {
     // those tests prune too (leaf_kernels.hpp), so what is tested, and every counter, is the same.
     const LeafKernelTable& kt = leaf_kernel_table();
     const float pl[3] = {px, py, pz};
+    if (!q_bounds_) {  // once per search, and only for a search that scans a leaf (a page's often does not)
+      for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
+      q_bounds_ = true;
+    }
     double limits_for = -1;
     float plane_lim = 0, box_lim = 0;
     for (std::uint32_t i = 0; i < m; ++i) {
@@ -417,6 +420,7 @@ class Query::DistanceSearch {
   double lim2 = std::numeric_limits<double>::infinity();  ///< (best + tol)^2
   float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
   float q_lo[3], q_hi[3];        ///< p rounded outwards to float (the triangle pre-filter's boxes)
+  bool q_bounds_ = false;        ///< q_lo, q_hi computed
   double slack = 0;
   std::uint32_t scan_node = UINT32_MAX;  ///< the node of the leaf being scanned, if known
 };
