@@ -61,7 +61,12 @@ def main():
     rows = load(args.results)
     if not rows:
         sys.exit(f"{args.results}: no results in runs/")
-    by = {key(r): r for r in rows}
+    by = {}
+    for r in rows:  # one result per (model, path, query, method): the most queries, then the latest run
+        k = key(r)
+        rank = (r["job"]["queries"]["n"], r["context"]["date"])
+        if k not in by or rank > (by[k]["job"]["queries"]["n"], by[k]["context"]["date"]):
+            by[k] = r
     models = []
     for r in rows:
         m = Path(r["job"]["mesh"]["path"]).stem
