@@ -104,7 +104,7 @@ def main():
 
         print(f"| {m} ({tris:,}) | {fmt_rate(d_auto)} | {fmt_rate(d_always)} | {fmt_rate(d_plain)} | {fmt_rate(d_emb)} "
               f"| {fmt_ratio(d_auto, d_emb, 2)} | {fmt_ratio(i_ebp, i_emb, 1)} | {fmt_ratio(ic_ebp, ic_emb, 2)} "
-              f"| {fmt_ratio(ir_ebp, ir_emb, 2 if tris >= 1_000_000 else None)} | {bpt(eb)}, {bpt(em)} |")
+              f"| {fmt_ratio(ir_ebp, ir_emb, 2 if tris >= 950_000 else None)} | {bpt(eb)}, {bpt(em)} |")
 
     ooc = [r for r in rows if r["job"]["params"].get("store")]
     if ooc:
