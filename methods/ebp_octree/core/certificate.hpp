@@ -37,13 +37,26 @@ inline constexpr double kGrowth = 2.0;
 /// triangle pre-test ~40, a node ~80; in a certificate's scan a member's 8-wide bound ~6.
 struct Work {
   std::uint64_t triangles = 0, planes = 0, nodes = 0;
+  Work& operator+=(const Work& o) {
+    triangles += o.triangles;
+    planes += o.planes;
+    nodes += o.nodes;
+    return *this;
+  }
+  friend Work operator+(Work a, const Work& b) { return a += b; }
+  /// The work done between two readings of the same counters (b after a).
+  friend Work operator-(const Work& b, const Work& a) {
+    return {b.triangles - a.triangles, b.planes - a.planes, b.nodes - a.nodes};
+  }
 };
 inline Work work_of(const QueryCounters& c) { return {c.triangles_tested, c.planes_tested, c.nodes_visited}; }
 inline double search_work(const Work& a, const Work& b) {
-  return 220.0 * double(b.triangles - a.triangles) + 40.0 * double(b.planes - a.planes) + 80.0 * double(b.nodes - a.nodes);
+  const Work d = b - a;
+  return 220.0 * double(d.triangles) + 40.0 * double(d.planes) + 80.0 * double(d.nodes);
 }
 inline double scan_work(const Work& a, const Work& b) {
-  return 220.0 * double(b.triangles - a.triangles) + 6.0 * double(b.planes - a.planes);
+  const Work d = b - a;
+  return 220.0 * double(d.triangles) + 6.0 * double(d.planes);
 }
 /// A renewal's collection besides its search: ~350 instructions per triangle offered (copied,
 /// kept in the K-nearest heap), ~550 more per member of S (its bound's coefficients packed).
@@ -255,15 +268,17 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d&
     if (!path.cert.finish(&h)) return DistanceAnswer{};  // cannot happen: the mesh has a triangle
     path.renewed();
     const double collected = collection_work(path.cert.offered(), path.cert.size());
+    // This query's work, the renewal's included, is the new certificate's, however p is answered.
+    auto renewal_answered = [&] { path.certificate_answered(search_work(w0, work_now()) + collected); };
     if (!(centre == p)) {
-      if (!path.cert.covers(p)) {  // the renewal's cost is the certificate's all the same
+      if (!path.cert.covers(p)) {
         const DistanceAnswer a = plain();
-        path.certificate_answered(search_work(w0, work_now()) + collected);
+        renewal_answered();
         return a;
       }
       h = path.cert.serve(p, c);
     }
-    path.certificate_answered(search_work(w0, work_now()) + collected);
+    renewal_answered();
   } else {
     path.cert.clear();
     return searched();

@@ -197,19 +197,33 @@ EBP_AVX2 inline __m256 rows(const LeafTri* blk, unsigned m, unsigned j) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(row(j)), row(j + 4), 1);
 }
 
-EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
-  // Records j and j + 4 share a row register; the 4x4 transpose per 128-bit half gives lane j =
-  // triangle j.
-  const __m256 R0 = rows<offsetof(LeafTri, n)>(blk, m, 0), R1 = rows<offsetof(LeafTri, n)>(blk, m, 1),
-               R2 = rows<offsetof(LeafTri, n)>(blk, m, 2), R3 = rows<offsetof(LeafTri, n)>(blk, m, 3);
+/// Four floats at byte offset Off of 8 records, transposed: lane j of out[i] = float i of record j
+/// (records j and j + 4 share a row register; a 4x4 transpose per 128-bit half).
+template <std::size_t Off>
+EBP_AVX2 inline void columns(const LeafTri* blk, unsigned m, __m256 out[4]) {
+  const __m256 R0 = rows<Off>(blk, m, 0), R1 = rows<Off>(blk, m, 1), R2 = rows<Off>(blk, m, 2),
+               R3 = rows<Off>(blk, m, 3);
   const __m256 t0 = _mm256_unpacklo_ps(R0, R1), t1 = _mm256_unpackhi_ps(R0, R1);
   const __m256 t2 = _mm256_unpacklo_ps(R2, R3), t3 = _mm256_unpackhi_ps(R2, R3);
-  const __m256 nx = _mm256_shuffle_ps(t0, t2, 0x44), ny = _mm256_shuffle_ps(t0, t2, 0xEE);
-  const __m256 nz = _mm256_shuffle_ps(t1, t3, 0x44), d = _mm256_shuffle_ps(t1, t3, 0xEE);
-  const __m256 v = _mm256_sub_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_set1_ps(p[0])), _mm256_mul_ps(ny, _mm256_set1_ps(p[1]))),
-                    _mm256_mul_ps(nz, _mm256_set1_ps(p[2]))),
-      d);
+  out[0] = _mm256_shuffle_ps(t0, t2, 0x44);
+  out[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+  out[2] = _mm256_shuffle_ps(t1, t3, 0x44);
+  out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
+}
+
+/// ((nx p0 + ny p1) + nz p2) - d per lane, from columns n = (nx, ny, nz, d): the face-plane value
+/// every kernel and the distance search's per-triangle test evaluate, in the same order.
+EBP_AVX2 inline __m256 face_plane_values(const __m256 n[4], const float p[3]) {
+  return _mm256_sub_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], _mm256_set1_ps(p[0])), _mm256_mul_ps(n[1], _mm256_set1_ps(p[1]))),
+                    _mm256_mul_ps(n[2], _mm256_set1_ps(p[2]))),
+      n[3]);
+}
+
+EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+  __m256 n[4];
+  columns<offsetof(LeafTri, n)>(blk, m, n);
+  const __m256 v = face_plane_values(n, p);
   _mm256_storeu_ps(s, v);
   const unsigned gt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(eps), _CMP_GT_OQ)));
   const unsigned lt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(-eps), _CMP_LT_OQ)));
@@ -240,19 +254,6 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
 }
 
 
-/// Four rows of 8 records at byte offset Off, transposed: lane j of out[i] = field i of record j.
-template <std::size_t Off>
-EBP_AVX2 inline void columns(const LeafTri* blk, unsigned m, __m256 out[4]) {
-  const __m256 R0 = rows<Off>(blk, m, 0), R1 = rows<Off>(blk, m, 1), R2 = rows<Off>(blk, m, 2),
-               R3 = rows<Off>(blk, m, 3);
-  const __m256 t0 = _mm256_unpacklo_ps(R0, R1), t1 = _mm256_unpackhi_ps(R0, R1);
-  const __m256 t2 = _mm256_unpacklo_ps(R2, R3), t3 = _mm256_unpackhi_ps(R2, R3);
-  out[0] = _mm256_shuffle_ps(t0, t2, 0x44);
-  out[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
-  out[2] = _mm256_shuffle_ps(t1, t3, 0x44);
-  out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
-}
-
 EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
                                      const float q_hi[3], float plane_lim, float box_lim) {
   __m256 n[4], a[4], b[4], c[4];
@@ -260,11 +261,7 @@ EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float
   columns<offsetof(LeafTri, a)>(blk, m, a);  // ax, ay, az (lane 3: bx, unused)
   columns<offsetof(LeafTri, b)>(blk, m, b);
   columns<offsetof(LeafTri, c)>(blk, m, c);
-  const __m256 s = _mm256_sub_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], _mm256_set1_ps(p[0])), _mm256_mul_ps(n[1], _mm256_set1_ps(p[1]))),
-                    _mm256_mul_ps(n[2], _mm256_set1_ps(p[2]))),
-      n[3]);
-  const __m256 abs_s = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), s);
+  const __m256 abs_s = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), face_plane_values(n, p));
   __m256 sum = _mm256_setzero_ps();
   for (int k = 0; k < 3; ++k) {
     const __m256 lo = _mm256_min_ps(_mm256_min_ps(a[k], b[k]), c[k]), hi = _mm256_max_ps(_mm256_max_ps(a[k], b[k]), c[k]);

@@ -134,10 +134,7 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
   }
   const Work w0 = work_of(e.query->counters);
   e.query->distance_bound(p, bst.b, s);
-  const Work w1 = work_of(e.query->counters);  // the page's share of the path's work
-  page_work_.triangles += w1.triangles - w0.triangles;
-  page_work_.planes += w1.planes - w0.planes;
-  page_work_.nodes += w1.nodes - w0.nodes;
+  page_work_ += work_of(e.query->counters) - w0;  // the page's share of the path's work
   if (!bst.b.collect && bst.b.k != UINT32_MAX) {
     const LeafTri& tr = t.tris[bst.b.k];
     bst.page = id;
@@ -248,10 +245,7 @@ DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
   TriangleSite site;
   const DistanceAnswer r = certified_query(
       *path_, p, root_lo_, root_size_, top_counters_, &site,
-      [&] {
-        const Work top = work_of(top_counters_);
-        return Work{top.triangles + page_work_.triangles, top.planes + page_work_.planes, top.nodes + page_work_.nodes};
-      },
+      [&] { return work_of(top_counters_) + page_work_; },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         Best bst;
         bst.b.collect = &cert;
