@@ -41,7 +41,7 @@ void add_run_child_command(CLI::App& app) {
   cmd->add_option("--parent-pid", o->parent_pid,
                   "The process that started this one: if it is already gone, exit at once (status 3); "
                   "the job dies with it in any case")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1L, 4194304L));  // Linux's largest pid_max
   cmd->add_option("command", o->command, "PROGRAM (an absolute path) and its arguments, after --")->required();
   cmd->callback([o] {
     // This process dies with whoever started it (a Dask worker killed mid-job must not leave its
