@@ -1,6 +1,6 @@
 # bvhbench: the few commands a newcomer needs. `make help` lists them.
-#   make bench   install what is missing, build, make the default data, run the default suite, write the report
-#   make test    install what is missing, build, run every C++ and Python test and the CI regression gate
+#   make bench   install what is missing, build the runner, make the default data, run the default suite, write the report
+#   make test    install what is missing, build everything, run every C++ and Python test and the CI regression gate
 
 SHELL       := /bin/bash
 # Python: every Python step runs in the project's virtual environment $(VENV), made from $(PYTHON)
@@ -21,14 +21,29 @@ APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev \
   python3-dev pybind11-dev
+# What only `make test` needs beyond them: a real browser, in which the report's HTML is opened.
+TEST_APT_PACKAGES := chromium
 
-.PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper huge rebaseline fixture report clean distclean
+# One apt-get for the packages of $(1) that are not installed yet (checked one by one).
+define apt_install
+	@missing=$$(for p in $(1); do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  echo "deps: installing Debian packages:" $$missing; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
+	fi
+endef
+
+.PHONY: help deps test-deps venv build build-runner test test-cpp test-python gate bench estimate sweeps python data stability large paper huge rebaseline fixture report clean distclean
 
 help:
-	@echo "make bench      - install, build, make default data, run the default suite, write results/default/report/"
+	@echo "make bench      - install, build the runner, make default data, run the default suite, write results/default/report/ (about 12 minutes from a fresh clone on 2 cores)"
+	@echo "make sweeps     - the wide sweeps of every knob (suites/sweeps.yml) into results/sweeps/ with its report"
+	@echo "make python     - the Python methods, one call per query and batched, also on the 1M bunny (suites/python.yml)"
 	@echo "make test       - install, build, run C++ (ctest) and Python (pytest) tests, then the CI regression gate"
 	@echo "make deps       - install missing Debian packages, and Python packages into $(VENV)/ (idempotent, quiet when all present)"
-	@echo "make build      - configure and build $(BVHBENCH) ($(BUILD_TYPE))"
+	@echo "make build      - configure and build $(BVHBENCH) and every test ($(BUILD_TYPE))"
 	@echo "make stability  - the stability suite: every method on every stress mesh"
 	@echo "make large      - every method on a closed 4M-triangle model (about 15 minutes)"
 	@echo "make paper      - the paper's tables at 30M+ triangles (about an hour)"
@@ -37,14 +52,11 @@ help:
 	@echo "make fixture    - regenerate the report tests' result fixture (tests/fixtures/results_small/) on purpose"
 
 deps:
-	@missing=$$(for p in $(APT_PACKAGES); do \
-	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done); \
-	if [ -n "$$missing" ]; then \
-	  echo "deps: installing Debian packages:" $$missing; \
-	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
-	fi
+	$(call apt_install,$(APT_PACKAGES))
 	@tools/python_env.sh --python $(PYTHON) --venv $(VENV)
+
+test-deps:
+	$(call apt_install,$(TEST_APT_PACKAGES))
 
 # The Python environment alone (for the Python-only targets run by hand).
 venv:
@@ -56,7 +68,12 @@ $(BUILD_DIR)/build.ninja:
 build: deps $(BUILD_DIR)/build.ninja
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-test: build test-cpp test-python gate
+# The runner alone (with every method it hosts), without the C++ tests and fuzz replayers: what
+# `make bench` and the suites need. The same build folder as `make build`, which adds the rest.
+build-runner: deps $(BUILD_DIR)/build.ninja
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target bvhbench
+
+test: build test-deps test-cpp test-python gate
 
 # The venv's bin/ comes first on PATH, so that a C++ test that checks its files with NumPy finds it.
 test-cpp:
@@ -76,18 +93,36 @@ data: deps
 report: venv
 	$(VPY) plots/report.py results/default
 
-bench: build data
-	$(BVHBENCH) suite suites/default.yml --out results/default --resume
-	$(VPY) plots/report.py results/default
-	@echo "report: results/default/report/report.md"
+# $(call run_suite,NAME): suites/NAME.yml into results/NAME/, announced with its expected time
+# (tools/suite_estimate.py), then its report.
+define run_suite
+	@$(VPY) tools/suite_estimate.py suites/$(1).yml --out results/$(1) --bvhbench $(BVHBENCH) --resume || true
+	$(BVHBENCH) suite suites/$(1).yml --out results/$(1) --resume
+	$(VPY) plots/report.py results/$(1)
+	@echo "report: results/$(1)/report/report.md and report.html"
+endef
 
-stability: build
+bench: build-runner data
+	$(call run_suite,default)
+
+# How long the default suite (or SUITE=NAME) is expected to take here, without running it.
+SUITE ?= default
+estimate: build-runner
+	$(VPY) tools/suite_estimate.py suites/$(SUITE).yml --out results/$(SUITE) --bvhbench $(BVHBENCH) --resume
+
+sweeps: build-runner data
+	$(call run_suite,sweeps)
+
+python: build-runner data
+	$(call run_suite,python)
+
+stability: build-runner
 	$(VPY) datasets-scripts/make_datasets.py --preset stability
 	$(BVHBENCH) suite suites/stability.yml --out results/stability --resume
 	$(VPY) tools/stability_matrix.py results/stability
 	$(VPY) plots/report.py results/stability
 
-large: build
+large: build-runner
 	$(VPY) datasets-scripts/make_datasets.py --preset large
 	$(BVHBENCH) suite suites/large.yml --out results/large --resume
 	$(VPY) plots/report.py results/large
@@ -104,7 +139,7 @@ endef
 
 PAPER_MODELS := bunny_closed_32m scan_like_32m
 
-paper: build
+paper: build-runner
 	$(VPY) datasets-scripts/make_datasets.py --preset paper
 	$(call build_stores,data/paper,$(PAPER_MODELS))
 	$(BVHBENCH) suite suites/paper.yml --out results/paper --resume
@@ -115,7 +150,7 @@ paper: build
 # suites/huge.yml from a 256 MiB page cache. Hours rather than minutes on 2 cores.
 HUGE_MODELS := scan_like_128m
 
-huge: build
+huge: build-runner
 	$(VPY) datasets-scripts/make_datasets.py --preset huge
 	$(call build_stores,data/huge,$(HUGE_MODELS))
 	$(BVHBENCH) suite suites/huge.yml --out results/huge --resume
