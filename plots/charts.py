@@ -18,6 +18,7 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
 
 import fmt
+import headline
 import metrics
 import stability
 import sweeps
@@ -360,9 +361,13 @@ def _cfg_label(cfg):
     return method + (f" ({key})" if key else "")
 
 
-def _cfg_handle(cfg):
+def _cfg_handle(cfg, approximate=False):
+    """A configuration's legend entry; an approximate one (headline.approximate_configs) has a
+    hollow marker, as on the charts, and says so."""
     return Line2D([], [], color=method_color(cfg[0]), marker=method_marker(cfg[0]),
-                  linestyle=_cfg_linestyle(cfg), label=_cfg_label(cfg), markersize=6)
+                  linestyle=_cfg_linestyle(cfg), markersize=6,
+                  markerfacecolor="white" if approximate else method_color(cfg[0]),
+                  label=_cfg_label(cfg) + (" (approximate)" if approximate else ""))
 
 
 def _cfg_linestyle(cfg):
@@ -371,9 +376,14 @@ def _cfg_linestyle(cfg):
     return "--" if is_coherent(cfg[1]) else "-"
 
 
-def _plot_cfg(ax, xs, ys, cfg):
-    ax.plot(xs, ys, color=method_color(cfg[0]), marker=method_marker(cfg[0]), linewidth=1.6,
-            linestyle=_cfg_linestyle(cfg), zorder=3 if cfg[0] == tables.STAR else 2)
+def _plot_cfg(ax, xs, ys, cfg, approximate=False):
+    """One configuration's curve. Approximate ones are drawn apart from exact ones: hollow
+    markers and a thinner line, so that their speed is not read as an exact method's."""
+    c = method_color(cfg[0])
+    ax.plot(xs, ys, color=c, marker=method_marker(cfg[0]), linewidth=1.0 if approximate else 1.6,
+            linestyle=_cfg_linestyle(cfg), zorder=3 if cfg[0] == tables.STAR else 2,
+            markerfacecolor="white" if approximate else c, markersize=7 if approximate else 6,
+            markeredgewidth=1.5 if approximate else 1.0)
 
 
 def _failed_marks(ax, failed, method):
@@ -412,13 +422,14 @@ def throughput_vs_size(rs):
     if not combos:
         raise NoData("no ok job with a throughput on a regular model")
     fig, axes = _grid(len(combos), max_cols=2)
+    approx = headline.approximate_configs(rs)
     any_failed = False
     for ax, (query, kind) in zip(axes, combos):
         here = [j for j in jobs if j.query == query and j.kind == kind]
         for cfg in configs:
             xs, ys = _series(here, cfg, lambda j: j.qps)
             if xs:
-                _plot_cfg(ax, xs, ys, cfg)
+                _plot_cfg(ax, xs, ys, cfg, cfg in approx)
             failed = [j for j in here if (j.method, j.params_key) == cfg and not j.ok
                       and j.status != "unsupported"]
             any_failed |= bool(failed)
@@ -433,7 +444,7 @@ def throughput_vs_size(rs):
         _log_ticks(ax, "y", _si_formatter("q/s"))
         ax.set_ylabel("Throughput [queries/s]\n(higher is better \u2192)", fontsize=8)
         ax.set_title(f"{query} · {kind} path", fontsize=9)
-    handles = [_cfg_handle(c) for c in configs]
+    handles = [_cfg_handle(c, c in approx) for c in configs]
     if any_failed:
         handles.append(Line2D([], [], color="#555555", marker="x", linestyle="none",
                               label="did not finish ok\n(see non-ok table)"))
@@ -600,6 +611,7 @@ def thread_scaling(rs):
     configs = sorted({(j.method, j.params_key) for j in jobs if (j.mesh, j.query, j.kind) in on_panels},
                      key=lambda c: (method_sort_key(c[0]), c[1]))
     one_thread_only = set()
+    approx = headline.approximate_configs(rs)
     cores = {int(c) for c in (j.num("context.cores") for j in jobs) if c}
     for ax, (mesh, query, kind) in zip(axes, panels):
         all_t = set()
@@ -623,7 +635,7 @@ def thread_scaling(rs):
             # T > 1 jobs timed beside their own (queries.threads.single_thread_qps).
             singles = [s for t in ts for _, s in by_t[t] if s]
             base = ys[0] if ts[0] == 1 else (median(singles) if singles else None)
-            _plot_cfg(ax, ts, ys, cfg)
+            _plot_cfg(ax, ts, ys, cfg, cfg in approx)
             if base:
                 ideal_t = sorted(set(ts) | {1})
                 ax.plot(ideal_t, [base * t for t in ideal_t], color=method_color(cfg[0]),
@@ -647,7 +659,7 @@ def thread_scaling(rs):
         ax.set_title(_mesh_title(rs, mesh, f"{query} · {kind}"), fontsize=9)
     handles = []
     for c in configs:
-        h = _cfg_handle(c)
+        h = _cfg_handle(c, c in approx)
         if c in one_thread_only:
             h.set_linestyle("none")
             h.set_label(h.get_label() + " (one thread: no concurrent queries)")
@@ -751,7 +763,10 @@ CHARTS = {
         throughput_vs_size, "Throughput against model size",
         "Median queries per second of each method (one configuration per method, named in the "
         "legend) on each regular model, log-log. The dashed line is the 1 kHz rate a haptic "
-        "loop needs. Crosses on the bottom edge: jobs that crashed, timed out or failed."),
+        "loop needs. Crosses on the bottom edge: jobs that crashed, timed out or failed. "
+        "Hollow markers on a thin line: a configuration approximate by design (wrong answers "
+        "on most of its checked jobs; the report's accuracy lines): its speed is not an exact "
+        "method's."),
     "memory_vs_size": Chart(
         memory_vs_size, "Memory against model size",
         "Left: the structure's own byte count per triangle. Right: the job's peak resident "

@@ -4,7 +4,9 @@
     python plots/report.py results/NAME [--out DIR] [--strict]
 
 Reads results/NAME/runs/*.json (and cross-checks summary.csv); writes into results/NAME/report/
-(or --out): one PNG and one SVG per chart (see charts.CHARTS), report.md showing them, the
+(or --out): one PNG and one SVG per chart (see charts.CHARTS), report.md showing them and
+report.html, the same report as one self-contained page (charts inline, tables that sort and
+filter; html_report.py), the
 paper's tables as paper_table.md and paper_table.tex, and, for suites with stress meshes,
 stability.csv and stability.md.
 
@@ -24,6 +26,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import charts  # noqa: E402
+import headline  # noqa: E402
+import html_report  # noqa: E402
 import reproduction  # noqa: E402
 import stability  # noqa: E402
 import tables  # noqa: E402
@@ -55,7 +59,32 @@ def draw_charts(rs, out, strict):
     return done
 
 
+# The charts on the report's first screen, beside the headline table: speed against accuracy.
+FIRST_CHARTS = ("pareto_inside_wrong_rate", "pareto_distance_rel_err_p99")
+
+
+def _chart_md(name, drawn, rs):
+    chart = charts.CHARTS[name]
+    state, detail = drawn[name]
+    md = [f"## {chart.title}", ""]
+    if state == "ok":
+        png, svg = detail
+        md += [f"![{chart.title}]({png})", "", chart.caption + f" ([SVG]({svg}))", ""]
+    elif state == "nodata":
+        md += [f"_Not drawn: {detail}._", ""]
+    else:
+        md += [f"**Chart failed to draw:** `{detail}`", ""]
+    if name == "stability_matrix" and state == "ok":
+        md += [tables.context_line(rs), "", stability.LEGEND, "",
+               stability.matrix_md(stability.matrix(rs)),
+               "Also as [stability.csv](stability.csv) and [stability.md](stability.md).", ""]
+    return md
+
+
 def build_markdown(rs, drawn, paper_md):
+    """The report: first what a reader came for (the fastest exact method per model and query,
+    the EBP-Octree's ratio to it, each method's accuracy in a line, the speed/accuracy Pareto
+    charts), then every other chart and table, the job-by-job accuracy table in an appendix."""
     ctx = tables.context_line(rs)
     warn_h, warn_rows, unchecked = tables.accuracy_warnings(rs)
     failed_h, failed_rows = tables.failed_table(rs)
@@ -63,40 +92,30 @@ def build_markdown(rs, drawn, paper_md):
     md = [f"# bvhbench report: `{rs.name}`", "",
           ctx, "",
           f"{len(rs.jobs)} jobs: {n_ok} ok, {len(failed_rows)} not ok"
-          + (f", **{len(warn_rows)} ok jobs with wrong answers**" if warn_rows else "")
+          + (f", {len(warn_rows)} ok jobs with answers beyond the tolerances "
+             "(approximate methods among them; see Accuracy)" if warn_rows else "")
           + (f", {len(unchecked)} ok jobs without an oracle" if unchecked else "") + ".", ""]
 
-    md += ["## Accuracy warnings", ""]
-    if warn_rows:
-        md += [f"> **\u26a0 {len(warn_rows)} job(s) finished `ok` but gave wrong answers** "
-               f"(inside: wrong far from the surface; distance: error above "
-               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
-               "answer). Their speed figures below "
-               "are not comparable to exact methods'.", "",
-               ctx, "", tables.render_md(warn_h, warn_rows)]
-    else:
-        md += ["None: every ok job checked against the oracle is within tolerance.", ""]
-    if unchecked:
-        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
-               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
-               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
+    h, rows = headline.headline_table(rs)
+    md += ["## Fastest exact method per model and query", ""]
+    md += ([tables.render_md(h, rows), headline.NOTE, ""] if rows else
+           ["_No job was checked exact against the oracle: nothing to rank._", ""])
+
+    md += ["## Accuracy, per method", ""] + headline.accuracy_lines(rs) + [""]
+    md += [f"Tolerances: inside answers wrong far from the surface (beyond 1e-6 of the "
+           f"diagonal) count as wrong; distances beyond {tables.DIST_REL_ERR_TOL:g} of the "
+           "diagonal, with a wrong sign or non-finite, too. Every job: the appendix "
+           "\"Accuracy, job by job\".", ""]
+
+    for name in FIRST_CHARTS:
+        if name in charts.CHARTS:
+            md += _chart_md(name, drawn, rs)
 
     md += ["## The paper's tables", "", paper_md]
 
-    for name, chart in charts.CHARTS.items():
-        state, detail = drawn[name]
-        md += [f"## {chart.title}", ""]
-        if state == "ok":
-            png, svg = detail
-            md += [f"![{chart.title}]({png})", "", chart.caption + f" ([SVG]({svg}))", ""]
-        elif state == "nodata":
-            md += [f"_Not drawn: {detail}._", ""]
-        else:
-            md += [f"**Chart failed to draw:** `{detail}`", ""]
-        if name == "stability_matrix" and state == "ok":
-            md += [ctx, "", stability.LEGEND, "", stability.matrix_md(stability.matrix(rs)),
-                   "Also as [stability.csv](stability.csv) and [stability.md](stability.md).",
-                   ""]
+    for name in charts.CHARTS:
+        if name not in FIRST_CHARTS:
+            md += _chart_md(name, drawn, rs)
 
     md += ["## Jobs that did not finish ok", ""]
     if failed_rows:
@@ -109,6 +128,20 @@ def build_markdown(rs, drawn, paper_md):
     if rs.summary_only:
         md += [f"Jobs listed in summary.csv without a result file: "
                + ", ".join(f"`{j}`" for j in rs.summary_only) + ".", ""]
+
+    md += ["## Appendix: accuracy, job by job", ""]
+    if warn_rows:
+        md += [f"{len(warn_rows)} job(s) finished `ok` with answers beyond the tolerances "
+               f"(inside: wrong far from the surface; distance: error above "
+               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
+               "answer). Their speed figures are not comparable to exact methods'.", "",
+               ctx, "", tables.render_md(warn_h, warn_rows)]
+    else:
+        md += ["None: every ok job checked against the oracle is within tolerance.", ""]
+    if unchecked:
+        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
+               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
+               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
 
     md += ["## Machine and run", ""]
     h, rows = tables.context_table(rs)
@@ -168,7 +201,10 @@ def main(argv=None):
     paper_md = build_paper(rs, out)
     if rs.is_stability_suite():
         stability.write(rs, out, "stability.csv", "stability.md")
-    write_atomic(os.path.join(out, "report.md"), build_markdown(rs, drawn, paper_md))
+    md = build_markdown(rs, drawn, paper_md)
+    write_atomic(os.path.join(out, "report.md"), md)
+    write_atomic(os.path.join(out, "report.html"),
+                 html_report.render(md, out, f"bvhbench report: {rs.name}"))
 
     failed = [n for n, (s, _) in drawn.items() if s == "failed"]
     n_charts = sum(1 for s, _ in drawn.values() if s == "ok")

@@ -1,0 +1,150 @@
+"""The report's first screen: per model and query, the fastest exact method and the EBP-Octree's
+ratio to it; one accuracy line per method.
+
+Exact is measured, not declared: a job's answers are exact when it was checked against the
+oracle and is within the report's tolerances (tables.accuracy_problems). So a method is judged
+by what it did in this run, and a new method needs nothing here.
+
+A method configuration is *approximate by design* when most of its checked jobs answered wrongly
+(a sampled field, a fast winding number: its error is systematic), and *unexpectedly wrong* when
+it is right on most of them and wrong on a few: a method meant to be exact that failed somewhere,
+which the report names loudly. Standard library only.
+"""
+import fmt
+import tables
+from metrics import METRICS
+from results_io import config_label, is_batch, method_sort_key
+
+# A configuration wrong on at least this share of its checked jobs is approximate by design.
+SYSTEMATIC_SHARE = 0.5
+
+
+def _checked(jobs):
+    return [j for j in jobs if j.ok and j.has_accuracy]
+
+
+def config_accuracy(rs):
+    """{(method, params_key): {"checked": n, "wrong": [jobs], "approximate": bool}} over the
+    single-thread jobs on regular models."""
+    out = {}
+    for j in _checked(rs.model_jobs()):
+        c = out.setdefault((j.method, j.params_key), {"checked": 0, "wrong": []})
+        c["checked"] += 1
+        if tables.accuracy_problems(j):
+            c["wrong"].append(j)
+    for c in out.values():
+        c["approximate"] = bool(c["wrong"]) and len(c["wrong"]) >= SYSTEMATIC_SHARE * c["checked"]
+    return out
+
+
+def approximate_configs(rs):
+    """The (method, params_key) configurations that are approximate by design in this run."""
+    return {k for k, c in config_accuracy(rs).items() if c["approximate"]}
+
+
+def _worst(jobs):
+    """Worst errors over jobs: (inside far-wrong rate, distance max error / diagonal)."""
+    far = [METRICS["inside_wrong_rate_far"].getter(j) for j in jobs]
+    dist = [j.num("accuracy.distance.rel_error.max") for j in jobs]
+    far = [v for v in far if v is not None]
+    dist = [v for v in dist if v is not None]
+    return (max(far) if far else None), (max(dist) if dist else None)
+
+
+def _worst_text(jobs):
+    far, dist = _worst(jobs)
+    parts = []
+    if far:
+        parts.append(f"up to {fmt.sci(far)} of inside answers wrong far from the surface")
+    if dist:
+        parts.append(f"distance error up to {fmt.sci(dist)} of the diagonal")
+    return "; ".join(parts) or "wrong signs or non-finite answers"
+
+
+def accuracy_lines(rs):
+    """One Markdown bullet per method: exact, approximate by design (with its worst error), or
+    unexpectedly wrong (bold, with the jobs' count; the appendix lists them)."""
+    acc = config_accuracy(rs)
+    methods = sorted({m for m, _ in acc}, key=method_sort_key)
+    lines = []
+    for m in methods:
+        cfgs = {k: c for (mm, k), c in acc.items() if mm == m}
+        checked = sum(c["checked"] for c in cfgs.values())
+        approx = {k: c for k, c in cfgs.items() if c["approximate"]}
+        unexpected = {k: c for k, c in cfgs.items() if c["wrong"] and not c["approximate"]}
+        worst_exact = _worst(_checked([j for j in rs.model_jobs() if j.method == m]))[1]
+        if unexpected:
+            n = sum(len(c["wrong"]) for c in unexpected.values())
+            names = ", ".join(f"`{config_label(m + (':' + k if k else ''), k)}`"
+                              for k in sorted(unexpected))
+            lines.append(f"- **\u26a0 {m}: UNEXPECTED wrong answers in {n} of {checked} checked "
+                         f"jobs** ({names}; right on most of its other jobs): "
+                         f"{_worst_text([j for c in unexpected.values() for j in c['wrong']])}. "
+                         "See the appendix's job-by-job table.")
+        if approx:
+            wrong = [j for c in approx.values() for j in c["wrong"]]
+            names = ", ".join(f"`{k or 'defaults'}`" for k in sorted(approx))
+            every = len(approx) == len(cfgs)
+            lines.append(f"- {m}: approximate by design ({'every configuration' if every else names}; "
+                         f"wrong in {len(wrong)} of {sum(c['checked'] for c in approx.values())} "
+                         f"jobs): {_worst_text(wrong)}."
+                         + ("" if every else " Its other configurations are exact here."))
+        if not unexpected and not approx:
+            lines.append(f"- {m}: exact on all {checked} checked jobs"
+                         + (f" (distance error at most {fmt.sci(worst_exact)} of the diagonal)"
+                            if worst_exact else "") + ".")
+    unchecked = len([j for j in rs.model_jobs() if j.ok and not j.has_accuracy])
+    if unchecked:
+        lines.append(f"- {unchecked} ok job(s) ran without an oracle: not judged.")
+    return lines
+
+
+def _cells(rs):
+    """{(mesh, query, kind): [ok single-thread jobs]} on regular models, largest models first."""
+    cells = {}
+    for j in rs.model_jobs():
+        if j.ok and j.qps:
+            cells.setdefault((j.mesh, j.query, j.kind), []).append(j)
+    order = {m: i for i, m in enumerate(rs.meshes())}
+    return dict(sorted(cells.items(), key=lambda kv: (order.get(kv[0][0], 0), kv[0][1] != "inside",
+                                                       kv[0][2])))
+
+
+def _exact(j):
+    return j.has_accuracy and not tables.accuracy_problems(j)
+
+
+def headline_table(rs):
+    """(header, rows): per model, query and query path, the fastest exact configuration (of any
+    method; batch rows of Python methods left out: one call per query set is no per-query rate),
+    the EBP-Octree's fastest exact configuration, and its ratio to the fastest exact
+    configuration of any other method (above 1x the EBP-Octree is faster)."""
+    header = ["Model", "Triangles", "Query", "Path", "Fastest exact", "Rate",
+              "EBP-Octree (fastest exact)", "EBP rate", "EBP ÷ best other exact",
+              "Faster but approximate"]
+    rows = []
+    for (mesh, query, kind), jobs in _cells(rs).items():
+        per_query = [j for j in jobs if not is_batch(j.params_key)]
+        exact = sorted([j for j in per_query if _exact(j)], key=lambda j: -j.qps)
+        if not exact:
+            continue
+        best = exact[0]
+        star = next((j for j in exact if j.method == tables.STAR), None)
+        other = next((j for j in exact if j.method != tables.STAR), None)
+        ratio = star.qps / other.qps if star and other else None
+        faster_approx = sorted([j for j in per_query if j.has_accuracy and not _exact(j)
+                                and j.qps > best.qps], key=lambda j: -j.qps)
+        rows.append([mesh, fmt.count(rs.mesh_triangles(mesh)), query, kind,
+                     config_label(best.config, best.params_key), fmt.hz(best.qps),
+                     star.config if star else "– (none exact)", fmt.hz(star.qps) if star else "–",
+                     (f"{fmt.ratio(ratio)} vs {other.config}" if ratio else "–"),
+                     (f"{faster_approx[0].config} {fmt.hz(faster_approx[0].qps)}"
+                      if faster_approx else "–")])
+    return header, rows
+
+
+NOTE = ("Exact = checked against the oracle and within the report's tolerances in this job. "
+        "Rates are median queries per second, one thread. Every configuration run counts "
+        "(sweeps and path-coherent variants included); Python batch rows ([batch]: one call per "
+        "query set) are left out of this table. The ratio divides the EBP-Octree's fastest exact "
+        "rate by the fastest exact rate of any other method: above 1× the EBP-Octree is faster.")
