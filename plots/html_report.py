@@ -225,7 +225,9 @@ def render(md, folder, title):
             text = " ".join(para)
             cls = ' class="warn"' if "\u26a0" in text else ""
             body.append(f"<p{cls}>{_inline(text)}</p>")
+    if nav:   # the sections' links under the title
+        at = next((k + 1 for k, b in enumerate(body) if b.startswith("<h1")), 0)
+        body.insert(at, f"<nav>{''.join(nav)}</nav>")
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>\n"
-            + (f"<nav>{''.join(nav)}</nav>\n" if nav else "")
             + "\n".join(body) + f"\n<script>{SCRIPT}</script>\n</body></html>\n")
