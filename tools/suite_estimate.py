@@ -198,6 +198,11 @@ def main(argv=None):
                 if os.path.abspath(d) != os.path.abspath(args.out)] + DEFAULT_REFERENCES
     obs = [observation(r) for d in refs for r in load_results(d)]
     obs += [observation(r) for r in previous.values()]
+    # A model not made yet (or moved): its size as the results that ran on it recorded it.
+    for r in list(previous.values()) + [r for d in refs for r in load_results(d)]:
+        mesh = (r.get("job") or {}).get("mesh") or {}
+        if tris.get(mesh.get("name")) is None and mesh.get("triangles"):
+            tris[mesh["name"]] = mesh["triangles"]
     fallback = statistics.median([o["elapsed"] for o in obs]) if obs else 1.0
 
     total, skipped, how = 0.0, 0, {"previous run": 0, "similar result": 0, "guessed": 0}
