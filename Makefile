@@ -39,9 +39,10 @@ endef
 
 help:
 	@echo "make bench      - install, build the runner, make default data, run the default suite, write results/default/report/ (about 12 minutes from a fresh clone on 2 cores)"
+	@echo "make estimate   - how long the default suite (or SUITE=NAME) is expected to take here, without running it"
 	@echo "make sweeps     - the wide sweeps of every knob (suites/sweeps.yml) into results/sweeps/ with its report"
 	@echo "make python     - the Python methods, one call per query and batched, also on the 1M bunny (suites/python.yml)"
-	@echo "make test       - install, build, run C++ (ctest) and Python (pytest) tests, then the CI regression gate"
+	@echo "make test       - install (Chromium too: the report's browser test), build, run C++ (ctest) and Python (pytest) tests, then the CI regression gate"
 	@echo "make deps       - install missing Debian packages, and Python packages into $(VENV)/ (idempotent, quiet when all present)"
 	@echo "make build      - configure and build $(BVHBENCH) and every test ($(BUILD_TYPE))"
 	@echo "make stability  - the stability suite: every method on every stress mesh"
