@@ -25,6 +25,7 @@ th, td { border: 1px solid #ccc; padding: 2px 6px; text-align: left; vertical-al
 th { background: #f0f0f0; cursor: pointer; user-select: none; position: sticky; top: 0; }
 th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " \\25BC"; }
 tr:nth-child(even) td { background: #fafafa; }
+td.n { white-space: nowrap; }
 img.chart { max-width: 100%; height: auto; border: 1px solid #eee; }
 code { background: #f4f4f4; padding: 0 3px; font-size: 0.92em; }
 .filters { font-size: 0.85em; margin: 0.3em 0; }
@@ -161,7 +162,9 @@ def _table(lines):
            "<thead><tr>" + "".join(f"<th>{_inline(h)}</th>" for h in header) + "</tr></thead>",
            "<tbody>"]
     for line in lines[2:]:
-        out.append("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in _split_row(line)) + "</tr>")
+        # Short cells (names, rates) on one line, so that a table stays one screen tall.
+        tds = [(' class="n"' if len(c) <= 32 else "", _inline(c)) for c in _split_row(line)]
+        out.append("<tr>" + "".join(f"<td{cls}>{text}</td>" for cls, text in tds) + "</tr>")
     out.append("</tbody></table>")
     return "\n".join(out)
 
