@@ -73,7 +73,7 @@ def judge(rs, figure):
         return Verdict(figure, MET if met else NOT_MET, slowest.qps, slowest, evidence)
     if wrong_at_scale:
         evidence = (f"{len(wrong_at_scale)} ok job(s) on models of the paper's scale, all with "
-                    f"wrong answers (see Accuracy warnings), e.g. {_where(wrong_at_scale[0])}")
+                    f"wrong answers (see the report's accuracy lines), e.g. {_where(wrong_at_scale[0])}")
         return Verdict(figure, NOT_MET, None, wrong_at_scale[0], evidence)
     if smaller:
         largest = max(smaller.values(), key=lambda j: (j.triangles or 0, j.qps))

@@ -10,7 +10,7 @@ from metrics import METRICS
 from results_io import (config_label, is_coherent, median, method_sort_key, representative_configs,
                         shown_configs)
 
-# Accuracy tolerances of the "Accuracy warnings" section.
+# Accuracy tolerances of the report's accuracy lines and its job-by-job appendix (plots/headline.py).
 DIST_REL_ERR_TOL = 1e-5      # distance error above 1e-5 of the mesh diagonal is a wrong answer
 INSIDE_FAR_WRONG_TOL = 0     # any wrong inside answer far from the surface is a wrong answer
 
@@ -276,7 +276,7 @@ def paper_notes(rs):
             "(batch=true): its rate is what a Python caller gets from arrays, not a per-query "
             "latency; the same method without [batch] is called once per query. "
             "A status instead of a rate means that job did not finish ok (see the non-ok table); "
-            f"{WRONG_MARK} marks a rate whose answers were wrong (see Accuracy warnings). "
+            f"{WRONG_MARK} marks a rate whose answers were wrong (see the report's accuracy lines and appendix). "
             "Published figures: " + PAPER_REFERENCE["citation"] + ": 2.5 kHz random and 32 kHz "
             "haptic-path point-in-solid, about 1 MHz distance on haptic paths over models of "
             "25M+ polygons, on 2015 hardware; they are cited for reference, not measured here.")
