@@ -94,6 +94,9 @@ def accuracy_lines(rs):
                          + (f" (distance error at most {fmt.sci(worst_exact)} of the diagonal)"
                             if worst_exact else "") + ".")
     unchecked = len([j for j in rs.model_jobs() if j.ok and not j.has_accuracy])
+    if not methods:
+        lines.append("- No ok job on a regular model was checked against the oracle"
+                     + (" (stress cases: the stability matrix below)." if rs.stress_meshes else "."))
     if unchecked:
         lines.append(f"- {unchecked} ok job(s) ran without an oracle: not judged.")
     return lines
