@@ -1,0 +1,203 @@
+"""NVIDIA Warp (PyPI `warp-lang`): `wp.Mesh`'s BVH and the `mesh_query_point` family in a Warp
+kernel, on the CPU or a CUDA device (methods/README.md, "A Python method").
+
+Warp keeps the mesh in float32 (`wp.vec3`) and answers in float32: the closest point is read back
+and the distance is taken from the query as given to it, in double (as the fcpw method does), so
+that |closest - p| is the distance answered. The sign, and inside, is the sign Warp's query gives,
+by the method chosen with `sign`:
+- `parity`: `mesh_query_point_sign_parity`, the parity of the crossings of `n_sample` rays (majority
+  vote); exact on a closed mesh unless a ray grazes an edge, which its perturbed directions avoid;
+- `raycast`: `mesh_query_point`, a majority vote over the orientation of the closest hit of three
+  axis-aligned rays;
+- `normal`: `mesh_query_point_sign_normal`, the angle-weighted pseudonormal at the closest point;
+- `winding_number`: `mesh_query_point_sign_winding_number`, the fast winding number (`accuracy`,
+  `threshold`), the mesh built with its extra hierarchy.
+
+A query set is one kernel launch (batch=true); a per-query row is one launch per point, replayed
+from a launch recorded once (`wp.launch(..., record_cmd=True)`, Warp's way to cut a repeated
+launch's cost) on arrays allocated once: what a Python caller of Warp pays per point. The kernels are compiled (or loaded
+from Warp's kernel cache) when the method is created, not in build().
+
+`device=cuda` runs the kernels on the first CUDA device; without one the method is `unsupported`.
+There the points go to the device and the answers come back for every call: the time of those
+copies is kept apart from the kernels' as the counters `h2d_ns`, `kernel_ns` and `d2h_ns` (times,
+not work counts: they exist only with device=cuda, whose rows no CI machine without a GPU gates).
+On the CPU nothing is copied and there are no such counters.
+"""
+import time
+
+import numpy as np
+import warp as wp  # here, not in build(): the import is not the structure's build time
+
+wp.config.log_level = wp.LOG_WARNING  # Warp's banner and per-module lines would go to the runner's output
+
+DESCRIPTION = ("NVIDIA Warp: wp.Mesh BVH and mesh_query_point in a kernel (float32), sign by ray "
+               "parity, three-ray vote, pseudonormal or fast winding number; cpu or cuda")
+REQUIRES = ["numpy", "warp"]
+CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
+PARAMETERS = [
+    {"name": "device", "type": "choice", "default": "cpu", "choices": ["cpu", "cuda"],
+     "help": "where the kernels run: cpu, or the first CUDA device (unsupported without one); on "
+             "cuda the host-device copies are timed apart (counters h2d_ns, d2h_ns, kernel_ns)"},
+    {"name": "sign", "type": "choice", "default": "parity",
+     "choices": ["parity", "raycast", "normal", "winding_number"],
+     "help": "sign of distance and inside: ray parity (mesh_query_point_sign_parity), the "
+             "three-ray vote (mesh_query_point), the pseudonormal (sign_normal) or the fast "
+             "winding number (sign_winding_number, approximate)"},
+    {"name": "n_sample", "type": "integer", "default": 1, "min": 1, "max": 99,
+     "help": "parity: rays per query (majority vote; odd)"},
+    {"name": "accuracy", "type": "real", "default": 2.0, "min": 0.0, "max": 1e6,
+     "help": "winding_number: the fast winding number's accuracy (larger is more accurate)"},
+    {"name": "bvh_constructor", "type": "choice", "default": "sah", "choices": ["sah", "median", "lbvh"],
+     "help": "wp.Mesh's BVH construction (lbvh is the GPU builder)"},
+    {"name": "bvh_leaf_size", "type": "integer", "default": 0, "min": 0, "max": 64,
+     "help": "triangles per BVH leaf; 0 is Warp's default for the constructor"},
+]
+
+SIGNS = {"parity": 0, "raycast": 1, "normal": 2, "winding_number": 3}
+
+
+@wp.kernel
+def _query(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), sign: int, n_sample: int,
+           accuracy: float, sgn: wp.array(dtype=float), closest: wp.array(dtype=wp.vec3),
+           face: wp.array(dtype=int)):
+    i = wp.tid()
+    p = points[i]
+    big = 1.0e30
+    inside = float(0.0)
+    f = int(0)
+    u = float(0.0)
+    v = float(0.0)
+    found = bool(False)
+    if sign == 0:
+        found = wp.mesh_query_point_sign_parity(mesh, p, big, inside, f, u, v, n_sample, 0.1)
+    elif sign == 1:
+        found = wp.mesh_query_point(mesh, p, big, inside, f, u, v)
+    elif sign == 2:
+        found = wp.mesh_query_point_sign_normal(mesh, p, big, inside, f, u, v)
+    else:
+        found = wp.mesh_query_point_sign_winding_number(mesh, p, big, inside, f, u, v, accuracy, 0.5)
+    if found:
+        sgn[i] = inside
+        closest[i] = wp.mesh_eval_position(mesh, f, u, v)
+        face[i] = f
+    else:
+        sgn[i] = 0.0
+        face[i] = -1
+
+
+class Method:
+    def __init__(self, device="cpu", sign="parity", n_sample=1, accuracy=2.0, bvh_constructor="sah",
+                 bvh_leaf_size=0):
+        wp.init()
+        if device == "cuda" and not wp.is_cuda_available():
+            raise NotImplementedError("device=cuda: Warp finds no CUDA device on this machine "
+                                      "(no GPU, or no driver)")
+        self.device = wp.get_cuda_device() if device == "cuda" else wp.get_device("cpu")
+        self.on_gpu = device == "cuda"
+        self.sign = sign
+        self.n_sample = n_sample
+        self.accuracy = accuracy
+        self.bvh_constructor = bvh_constructor
+        self.bvh_leaf_size = bvh_leaf_size or None
+        # The kernel is compiled here (or loaded from Warp's cache), not by the first query.
+        wp.load_module(device=self.device)
+        self._one = self._buffers(1)
+        self.reset_counters()
+
+    def _buffers(self, n):
+        return (wp.empty(n, dtype=wp.vec3, device=self.device), wp.empty(n, dtype=float, device=self.device),
+                wp.empty(n, dtype=wp.vec3, device=self.device), wp.empty(n, dtype=int, device=self.device))
+
+    def build(self, V, F):
+        self.V32 = np.ascontiguousarray(V, dtype=np.float32)
+        self.F32 = np.ascontiguousarray(F, dtype=np.int32).reshape(-1)
+        self.mesh = wp.Mesh(points=wp.array(self.V32, dtype=wp.vec3, device=self.device),
+                            indices=wp.array(self.F32, dtype=wp.int32, device=self.device),
+                            support_winding_number=self.sign == "winding_number",
+                            bvh_constructor=self.bvh_constructor, bvh_leaf_size=self.bvh_leaf_size)
+        wp.synchronize_device(self.device)
+        tri = V[F]
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        length = np.linalg.norm(n, axis=1)
+        # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
+        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self._one_cmd = self._launch(1, self._one, record=True)
+        self._one_views = None if self.on_gpu else [a.numpy() for a in self._one]
+
+    def _launch(self, n, buffers, record=False):
+        points, signed, closest, face = buffers
+        return wp.launch(_query, dim=n, device=self.device, record_cmd=record,
+                         inputs=[self.mesh.id, points, SIGNS[self.sign], self.n_sample, self.accuracy],
+                         outputs=[signed, closest, face])
+
+    def _run(self, P, buffers, cmd=None):
+        """Warp's answers at P (N, 3): (sign (N,) float32, closest (N, 3) float64, face (N,))."""
+        points, signed, closest, face = buffers
+        t0 = time.perf_counter_ns()
+        points.assign(np.asarray(P, dtype=np.float32))
+        if self.on_gpu:
+            wp.synchronize_device(self.device)
+        t1 = time.perf_counter_ns()
+        if cmd is not None:
+            cmd.launch()
+        else:
+            self._launch(len(P), buffers)
+        if self.on_gpu:
+            wp.synchronize_device(self.device)
+        t2 = time.perf_counter_ns()
+        s, c, f = signed.numpy(), closest.numpy().astype(np.float64), face.numpy().astype(np.int64)
+        if self.on_gpu:
+            t3 = time.perf_counter_ns()
+            self.times["h2d_ns"] += t1 - t0
+            self.times["kernel_ns"] += t2 - t1
+            self.times["d2h_ns"] += t3 - t2
+        if (f < 0).any():
+            raise RuntimeError(f"Warp found no closest point for {int((f < 0).sum())} of {len(P)} "
+                               "queries (every triangle degenerate?)")
+        return s, c, f
+
+    def inside(self, P):
+        s, _, _ = self._run(P, self._buffers(len(P)))
+        return s < 0
+
+    def distance(self, P):
+        s, closest, f = self._run(P, self._buffers(len(P)))
+        d = np.linalg.norm(closest - P, axis=1)  # from the query as given, in double
+        return np.where(s < 0, -d, d), closest, self.face_normals[f], f
+
+    def _run_one(self, p):
+        """Warp's answer at one point (sign, closest (3,) float64, face), through the launch
+        recorded at the end of build(); on the CPU the arrays are numpy views of Warp's memory."""
+        if self.on_gpu:
+            s, c, f = self._run(np.array([p]), self._one, self._one_cmd)
+            return s[0], c[0], int(f[0])
+        self._one_views[0][0] = p
+        self._one_cmd.launch()
+        s, c, f = self._one_views[1][0], self._one_views[2][0].astype(np.float64), int(self._one_views[3][0])
+        if f < 0:
+            raise RuntimeError(f"Warp found no closest point for the query {p}")
+        return s, c, f
+
+    def inside_one(self, p):
+        return bool(self._run_one(p)[0] < 0)
+
+    def distance_one(self, p):
+        s, closest, t = self._run_one(p)
+        d = float(np.linalg.norm(closest - p))
+        return (-d if s < 0 else d), closest, self.face_normals[t], t
+
+    def counters(self):
+        return dict(self.times)
+
+    def reset_counters(self):
+        self.times = {"h2d_ns": 0, "kernel_ns": 0, "d2h_ns": 0} if self.on_gpu else {}
+
+    def structure_bytes(self):
+        # Warp's copy of the geometry (float32 points, int32 indices) and the normals held here;
+        # the BVH's nodes are not reported by Warp: memory.peak_rss_bytes has them (on cpu).
+        return int(self.V32.nbytes + self.F32.nbytes + self.face_normals.nbytes)
+
+    def info(self):
+        return {"device": str(self.device), "sign": self.sign, "warp": wp.config.version,
+                "structure_bytes": "geometry and normals only; BVH nodes not counted (not reported)"}
