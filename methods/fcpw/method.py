@@ -32,7 +32,7 @@ PARAMETERS = [
      "help": "fcpw's aggregate: a BVH by its split heuristic, or baseline (every triangle)"},
     {"name": "vectorize", "type": "boolean", "default": True,
      "help": "fcpw's wide (SIMD) BVH nodes"},
-    {"name": "rescale", "type": "boolean", "default": True,
+    {"name": "rescale", "type": "boolean", "default": True, "role": "build",
      "help": "hand fcpw the mesh and queries scaled by a power of two (exact in float32) to a box "
              "~1024 across: its ray test's absolute epsilon misses crossings on small models "
              "(false: the coordinates as given)"},

@@ -17,9 +17,12 @@ DESCRIPTION = ("gpytoolbox: libigl AABB squared_distance (precomputed tree, doub
 REQUIRES = ["numpy", "gpytoolbox"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "order", "type": "integer", "default": 2, "min": 0, "max": 2,
+    {"name": "order", "type": "integer", "default": 2, "min": 0, "max": 2, "role": "build",
      "help": "fast winding number: Taylor expansion order of its hierarchy (higher is more accurate)"},
 ]
+
+# The default sweep of `methods: all` suites: whole query sets, at two Taylor orders.
+SWEEP = ["batch=true", "batch=true,order=1"]
 
 
 class Method:

@@ -21,10 +21,13 @@ DESCRIPTION = ("Open3D RaycastingScene (Embree 4, float32): compute_closest_poin
 REQUIRES = ["numpy", "open3d"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "nsamples", "type": "choice", "default": "1", "choices": ["1", "3", "5", "7", "9"],
+    {"name": "nsamples", "type": "choice", "default": "1", "role": "query", "choices": ["1", "3", "5", "7", "9"],
      "help": "rays per inside test (majority vote; Open3D asks an odd number): more rays guard "
              "against a ray through an edge or vertex"},
 ]
+
+# The default sweep of `methods: all` suites: whole query sets, one ray and three.
+SWEEP = ["batch=true", "batch=true,nsamples=3"]
 
 
 class Method:

@@ -36,23 +36,26 @@ DESCRIPTION = ("NVIDIA Warp: wp.Mesh BVH and mesh_query_point in a kernel (float
 REQUIRES = ["numpy", "warp"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "device", "type": "choice", "default": "cpu", "choices": ["cpu", "cuda"],
+    {"name": "device", "type": "choice", "default": "cpu", "role": "build", "choices": ["cpu", "cuda"],
      "help": "where the kernels run: cpu, or the first CUDA device (unsupported without one); on "
              "cuda the host-device copies are timed apart (counters h2d_ns, d2h_ns, kernel_ns)"},
-    {"name": "sign", "type": "choice", "default": "parity",
+    {"name": "sign", "type": "choice", "default": "parity", "role": "build",
      "choices": ["parity", "raycast", "normal", "winding_number"],
      "help": "sign of distance and inside: ray parity (mesh_query_point_sign_parity), the "
              "three-ray vote (mesh_query_point), the pseudonormal (sign_normal) or the fast "
              "winding number (sign_winding_number, approximate)"},
-    {"name": "n_sample", "type": "integer", "default": 1, "min": 1, "max": 99,
+    {"name": "n_sample", "type": "integer", "default": 1, "min": 1, "max": 99, "role": "query",
      "help": "parity: rays per query (majority vote; odd)"},
-    {"name": "accuracy", "type": "real", "default": 2.0, "min": 0.0, "max": 1e6,
+    {"name": "accuracy", "type": "real", "default": 2.0, "min": 0.0, "max": 1e6, "role": "query",
      "help": "winding_number: the fast winding number's accuracy (larger is more accurate)"},
-    {"name": "bvh_constructor", "type": "choice", "default": "sah", "choices": ["sah", "median", "lbvh"],
+    {"name": "bvh_constructor", "type": "choice", "default": "sah", "role": "build", "choices": ["sah", "median", "lbvh"],
      "help": "wp.Mesh's BVH construction (lbvh is the GPU builder)"},
-    {"name": "bvh_leaf_size", "type": "integer", "default": 0, "min": 0, "max": 64,
+    {"name": "bvh_leaf_size", "type": "integer", "default": 0, "min": 0, "max": 64, "role": "build",
      "help": "triangles per BVH leaf; 0 is Warp's default for the constructor"},
 ]
+# The default sweep of `methods: all` suites: whole query sets (the interpreter's per-query cost
+# is the per-query rows' question), exact by parity, and the two faster approximate signs.
+SWEEP = ["batch=true", "batch=true,sign=normal", "batch=true,sign=winding_number"]
 
 SIGNS = {"parity": 0, "raycast": 1, "normal": 2, "winding_number": 3}
 
