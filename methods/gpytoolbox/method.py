@@ -6,8 +6,9 @@ is what `gpytoolbox.squared_distance(P, V, F, use_cpp=True, cpp_aabb=tree)` call
 barycentric coordinates that function then computes (the closest point is given). The sign, and
 inside, is the fast winding number (`fast_winding_number_precompute(V, F, order)`, Barill et al.
 2018) > 1/2, as `gpytoolbox.signed_distance` signs: gpytoolbox's 3D winding number is the fast
-one only, so inside is approximate near the surface (its Taylor `order` is the knob). Everything
-is in double, on the mesh as given.
+one only, so inside is approximate near the surface (its Taylor `order` and `accuracy_scale` are
+the knobs). Everything is in double, on the mesh as given. The bindings take writeable arrays
+only: the harness's read-only query array is copied (as gpytoolbox's own functions copy it).
 """
 import gpytoolbox as gp  # here, not in build(): the import is not the structure's build time
 import numpy as np
@@ -19,15 +20,18 @@ CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
     {"name": "order", "type": "integer", "default": 2, "min": 0, "max": 2, "role": "build",
      "help": "fast winding number: Taylor expansion order of its hierarchy (higher is more accurate)"},
+    {"name": "accuracy_scale", "type": "real", "default": 2.0, "min": 0.0, "max": 1e6, "role": "query",
+     "help": "fast winding number: larger is more accurate and slower (libigl recommends 2)"},
 ]
 
 # The default sweep of `methods: all` suites: whole query sets, at two Taylor orders.
-SWEEP = ["batch=true", "batch=true,order=1"]
+SWEEP = ["batch=true", "batch=true,order=1,accuracy_scale=1"]
 
 
 class Method:
-    def __init__(self, order=2):
+    def __init__(self, order=2, accuracy_scale=2.0):
         self.order = order
+        self.accuracy_scale = accuracy_scale
 
     def build(self, V, F):
         self.V = np.ascontiguousarray(V, dtype=np.float64)
@@ -41,13 +45,13 @@ class Method:
         self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
 
     def inside(self, P):
-        return self.fwn.winding_number(np.asarray(P, dtype=np.float64)) > 0.5
+        return np.reshape(self.fwn.winding_number(np.array(P, dtype=np.float64), self.accuracy_scale), -1) > 0.5
 
     def distance(self, P):
-        P = np.asarray(P, dtype=np.float64)
+        P = np.array(P, dtype=np.float64)
         sqr, tri, closest = self.tree.squared_distance(P)
-        tri = np.asarray(tri, dtype=np.int64)
-        d = np.sqrt(sqr)
+        tri = np.reshape(tri, -1).astype(np.int64)
+        d = np.sqrt(np.reshape(sqr, -1))
         return np.where(self.inside(P), -d, d), closest, self.face_normals[tri], tri
 
     def structure_bytes(self):
@@ -56,6 +60,6 @@ class Method:
         return int(self.V.nbytes + self.F.nbytes + self.face_normals.nbytes + max(0, 2 * len(self.F) - 1) * 72)
 
     def info(self):
-        return {"order": self.order,
+        return {"order": self.order, "accuracy_scale": self.accuracy_scale,
                 "structure_bytes": "arrays exactly; the AABB at 72 bytes a node (2F-1 nodes, libigl's "
                                    "layout); the fast winding number's hierarchy not counted (not reported)"}

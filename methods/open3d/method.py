@@ -11,7 +11,9 @@ is the distance answered. Inside is `compute_occupancy`.
 Threads: Open3D's calls run on every core unless told (`nthreads=0`); like every Python method
 here (held to one thread, methods/README.md "Hosting") the scene is built and queried with
 nthreads=1. The scene builds its Embree BVH on the first query: build() asks one of each kind so
-that the build is timed as the build.
+that the build is timed as the build. A point outside the mesh's bounding box is outside without
+a ray (as trimesh's contains does): on an open surface a ray from afar may cross it an odd number
+of times, and nothing outside the box is inside whatever the mesh.
 """
 import numpy as np
 import open3d as o3d  # here, not in build(): the import (seconds) is not the structure's build time
@@ -52,10 +54,15 @@ class Method:
         length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
         self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.lo, self.hi = V.min(axis=0), V.max(axis=0)
+
+    def _occupied(self, P, Q):
+        """compute_occupancy at P (its float32 tensor Q), false outside the mesh's box."""
+        occupied = self.scene.compute_occupancy(Q, nthreads=1, nsamples=self.nsamples).numpy() > 0.5
+        return occupied & ((P >= self.lo) & (P <= self.hi)).all(axis=1)
 
     def inside(self, P):
-        occupied = self.scene.compute_occupancy(self._points(P), nthreads=1, nsamples=self.nsamples)
-        return occupied.numpy() > 0.5
+        return self._occupied(P, self._points(P))
 
     def distance(self, P):
         Q = self._points(P)
@@ -64,7 +71,7 @@ class Method:
         tri = found["primitive_ids"].numpy().astype(np.int64)
         if (tri > len(self.face_normals)).any():  # Open3D's invalid id (no triangle found)
             raise RuntimeError("Open3D found no closest triangle for some queries")
-        inside = self.scene.compute_occupancy(Q, nthreads=1, nsamples=self.nsamples).numpy() > 0.5
+        inside = self._occupied(P, Q)
         d = np.linalg.norm(closest - P, axis=1)  # from the query as given, in double
         return np.where(inside, -d, d), closest, self.face_normals[tri], tri
 

@@ -31,6 +31,19 @@ PARAMETERS = []
 SWEEP = ["batch=true"]
 
 
+def _on_longest_edge(P, T):
+    """The closest points to P (n, 3) on the longest edge of each triangle of T (n, 3, 3): the
+    closest point of a zero-area triangle (a segment, or a point), where barycentric coordinates
+    are undefined."""
+    ends = np.stack([T, np.roll(T, -1, axis=1)], axis=2)  # (n, 3 edges, 2 ends, 3)
+    length = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=2)
+    e = ends[np.arange(len(T)), length.argmax(axis=1)]
+    a, ab = e[:, 0], e[:, 1] - e[:, 0]
+    ll = (ab * ab).sum(axis=1)
+    t = np.clip(np.divide(((P - a) * ab).sum(axis=1), ll, out=np.zeros_like(ll), where=ll > 0), 0, 1)
+    return a + t[:, None] * ab
+
+
 def _rows(P):
     """P as a C-contiguous float64 (N, 3) array of at least two rows (see the module's comment)."""
     P = np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3)
@@ -56,7 +69,12 @@ class Method:
         d, tri, bc = pcu.closest_points_on_mesh(Q, self.V, self.F)
         n = len(P)
         d, tri, bc = np.reshape(d, -1)[:n], np.reshape(tri, -1)[:n].astype(np.int64), np.reshape(bc, (-1, 3))[:n]
-        closest = np.einsum("nk,nkj->nj", bc, self.V[self.F[tri]])
+        corners = self.V[self.F[tri]]
+        closest = np.einsum("nk,nkj->nj", bc, corners)
+        # A zero-area closest triangle has no barycentric coordinates (NaN): its longest edge.
+        bad = ~np.isfinite(closest).all(axis=1)
+        if bad.any():
+            closest[bad] = _on_longest_edge(np.asarray(P, dtype=np.float64).reshape(-1, 3)[bad], corners[bad])
         return np.where(self.inside(P), -d, d), closest, self.face_normals[tri], tri
 
     def structure_bytes(self):

@@ -18,6 +18,13 @@ from a launch recorded once (`wp.launch(..., record_cmd=True)`, Warp's way to cu
 launch's cost) on arrays allocated once: what a Python caller of Warp pays per point. The kernels are compiled (or loaded
 from Warp's kernel cache) when the method is created, not in build().
 
+Slivers. Warp's closest-point search skips a triangle whose |(b - a) x (c - a)| is below 1e-6 of
+the sum of its squared edges (its "sliver detection", native/mesh.h), so a zero-area triangle that
+is a segment is never the closest. The harness's contract counts it (docs/architecture.md,
+"Contracts"): the method finds those triangles by Warp's own test and answers them itself, the
+closest point on each one's longest edge, in numpy, where they are closer than Warp's answer. A
+mesh without slivers (every real model here) pays nothing for it.
+
 `device=cuda` runs the kernels on the first CUDA device; without one the method is `unsupported`.
 There the points go to the device and the answers come back for every call: the time of those
 copies is kept apart from the kernels' as the counters `h2d_ns`, `kernel_ns` and `d2h_ns` (times,
@@ -58,6 +65,31 @@ PARAMETERS = [
 SWEEP = ["batch=true", "batch=true,sign=normal", "batch=true,sign=winding_number"]
 
 SIGNS = {"parity": 0, "raycast": 1, "normal": 2, "winding_number": 3}
+
+# Slivers answered per pass of this many (bounds the (points x slivers) arrays).
+SLIVER_CHUNK = 256
+
+
+def _on_longest_edges(P, A, B):
+    """For points P (n, 3) and segments A -> B (s, 3): the squared distance (n,), the segment and
+    the closest point (n, 3) of the closest segment to each point, in double."""
+    best_d2 = np.full(len(P), np.inf)
+    best_k = np.zeros(len(P), dtype=np.int64)
+    best_c = np.zeros((len(P), 3))
+    for k0 in range(0, len(A), SLIVER_CHUNK):
+        a, ab = A[k0:k0 + SLIVER_CHUNK], B[k0:k0 + SLIVER_CHUNK] - A[k0:k0 + SLIVER_CHUNK]
+        ll = (ab * ab).sum(axis=1)
+        t = np.einsum("nsj,sj->ns", P[:, None, :] - a[None], ab)
+        t = np.clip(np.divide(t, ll, out=np.zeros_like(t), where=ll > 0), 0, 1)
+        c = a[None] + t[..., None] * ab[None]
+        d2 = ((c - P[:, None, :]) ** 2).sum(axis=2)
+        k = d2.argmin(axis=1)
+        rows = np.arange(len(P))
+        better = d2[rows, k] < best_d2
+        best_d2[better] = d2[rows, k][better]
+        best_k[better] = k[better] + k0
+        best_c[better] = c[rows, k][better]
+    return best_d2, best_k, best_c
 
 
 @wp.kernel
@@ -125,6 +157,17 @@ class Method:
         length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
         self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        # Warp's sliver test (float32, as Warp computes it; 0/0 for a point is no sliver there).
+        T = self.V32[F]
+        e0, e1, e2 = T[:, 1] - T[:, 0], T[:, 2] - T[:, 0], T[:, 2] - T[:, 1]
+        edges2 = (e0 * e0).sum(axis=1) + (e1 * e1).sum(axis=1) + (e2 * e2).sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sliver = np.linalg.norm(np.cross(e0, e1), axis=1) / edges2 < 1e-6
+        self.slivers = np.flatnonzero(sliver)
+        ends = np.stack([tri, np.roll(tri, -1, axis=1)], axis=2)[self.slivers]  # (s, 3 edges, 2, 3)
+        longest = np.linalg.norm(ends[:, :, 1] - ends[:, :, 0], axis=2).argmax(axis=1)
+        seg = ends[np.arange(len(self.slivers)), longest]
+        self.sliver_a, self.sliver_b = seg[:, 0].copy(), seg[:, 1].copy()
         self._one_cmd = self._launch(1, self._one, record=True)
         self._one_views = None if self.on_gpu else [a.numpy() for a in self._one]
 
@@ -155,9 +198,19 @@ class Method:
             self.times["h2d_ns"] += t1 - t0
             self.times["kernel_ns"] += t2 - t1
             self.times["d2h_ns"] += t3 - t2
+        return self._with_slivers(P, s, c, f)
+
+    def _with_slivers(self, P, s, c, f):
+        """Warp's answers with the slivers it skips answered here where they are closer."""
+        if len(self.slivers):
+            P = np.asarray(P, dtype=np.float64).reshape(-1, 3)
+            d2, k, on = _on_longest_edges(P, self.sliver_a, self.sliver_b)
+            warp_d2 = np.where(f >= 0, ((c - P) ** 2).sum(axis=1), np.inf)
+            closer = d2 < warp_d2
+            c, f = c.copy(), f.copy()
+            c[closer], f[closer] = on[closer], self.slivers[k[closer]]
         if (f < 0).any():
-            raise RuntimeError(f"Warp found no closest point for {int((f < 0).sum())} of {len(P)} "
-                               "queries (every triangle degenerate?)")
+            raise RuntimeError(f"Warp found no closest point for {int((f < 0).sum())} of {len(f)} queries")
         return s, c, f
 
     def inside(self, P):
@@ -178,8 +231,9 @@ class Method:
         self._one_views[0][0] = p
         self._one_cmd.launch()
         s, c, f = self._one_views[1][0], self._one_views[2][0].astype(np.float64), int(self._one_views[3][0])
-        if f < 0:
-            raise RuntimeError(f"Warp found no closest point for the query {p}")
+        if len(self.slivers) or f < 0:
+            _, cs, fs = self._with_slivers(np.array([p]), None, c[None], np.array([f]))
+            c, f = cs[0], int(fs[0])
         return s, c, f
 
     def inside_one(self, p):
