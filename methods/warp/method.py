@@ -13,6 +13,11 @@ by the method chosen with `sign`:
 - `winding_number`: `mesh_query_point_sign_winding_number`, the fast winding number (`accuracy`,
   `threshold`), the mesh built with its extra hierarchy.
 
+Inside with sign=parity and one ray is `mesh_query_ray_count_intersections` (Warp's documented
+inside test: an odd count of crossings along one ray), without the closest-point search that
+sign_parity makes first; its ray is a fixed direction off the axes (a ray along an axis meets the
+edges of axis-aligned meshes). The other signs answer inside with their query's sign.
+
 A query set is one kernel launch (batch=true); a per-query row is one launch per point, replayed
 from a launch recorded once (`wp.launch(..., record_cmd=True)`, Warp's way to cut a repeated
 launch's cost) on arrays allocated once: what a Python caller of Warp pays per point. The kernels are compiled (or loaded
@@ -121,6 +126,23 @@ def _query(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), sign: int, n_sample
         face[i] = -1
 
 
+# The inside ray's direction: off the axes and the diagonals (an irrational-looking mix).
+RAY_DIRECTION = (0.5773502691896258, 0.6411854546, 0.5054445867)
+
+
+@wp.kernel
+def _inside_parity(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), direction: wp.vec3,
+                   sgn: wp.array(dtype=float), closest: wp.array(dtype=wp.vec3),
+                   face: wp.array(dtype=int)):
+    i = wp.tid()
+    crossings = wp.mesh_query_ray_count_intersections(mesh, points[i], direction)
+    if crossings % 2 == 1:
+        sgn[i] = -1.0
+    else:
+        sgn[i] = 1.0
+    face[i] = 0
+
+
 class Method:
     def __init__(self, device="cpu", sign="parity", n_sample=1, accuracy=2.0, bvh_constructor="sah",
                  bvh_leaf_size=0):
@@ -169,16 +191,22 @@ class Method:
         seg = ends[np.arange(len(self.slivers)), longest]
         self.sliver_a, self.sliver_b = seg[:, 0].copy(), seg[:, 1].copy()
         self._one_cmd = self._launch(1, self._one, record=True)
+        self._one_inside_cmd = self._launch(1, self._one, record=True, inside_only=True)
         self._one_views = None if self.on_gpu else [a.numpy() for a in self._one]
 
-    def _launch(self, n, buffers, record=False):
+    def _launch(self, n, buffers, record=False, inside_only=False):
         points, signed, closest, face = buffers
+        if inside_only and self.sign == "parity" and self.n_sample == 1:
+            return wp.launch(_inside_parity, dim=n, device=self.device, record_cmd=record,
+                             inputs=[self.mesh.id, points, wp.vec3(*RAY_DIRECTION)],
+                             outputs=[signed, closest, face])
         return wp.launch(_query, dim=n, device=self.device, record_cmd=record,
                          inputs=[self.mesh.id, points, SIGNS[self.sign], self.n_sample, self.accuracy],
                          outputs=[signed, closest, face])
 
-    def _run(self, P, buffers, cmd=None):
-        """Warp's answers at P (N, 3): (sign (N,) float32, closest (N, 3) float64, face (N,))."""
+    def _run(self, P, buffers, cmd=None, inside_only=False):
+        """Warp's answers at P (N, 3): (sign (N,) float32, closest (N, 3) float64, face (N,));
+        inside_only: the sign alone (closest and face are not answers then)."""
         points, signed, closest, face = buffers
         t0 = time.perf_counter_ns()
         points.assign(np.asarray(P, dtype=np.float32))
@@ -188,7 +216,7 @@ class Method:
         if cmd is not None:
             cmd.launch()
         else:
-            self._launch(len(P), buffers)
+            self._launch(len(P), buffers, inside_only=inside_only)
         if self.on_gpu:
             wp.synchronize_device(self.device)
         t2 = time.perf_counter_ns()
@@ -198,6 +226,8 @@ class Method:
             self.times["h2d_ns"] += t1 - t0
             self.times["kernel_ns"] += t2 - t1
             self.times["d2h_ns"] += t3 - t2
+        if inside_only:
+            return s, c, f
         return self._with_slivers(P, s, c, f)
 
     def _with_slivers(self, P, s, c, f):
@@ -214,7 +244,7 @@ class Method:
         return s, c, f
 
     def inside(self, P):
-        s, _, _ = self._run(P, self._buffers(len(P)))
+        s, _, _ = self._run(P, self._buffers(len(P)), inside_only=True)
         return s < 0
 
     def distance(self, P):
@@ -222,14 +252,17 @@ class Method:
         d = np.linalg.norm(closest - P, axis=1)  # from the query as given, in double
         return np.where(s < 0, -d, d), closest, self.face_normals[f], f
 
-    def _run_one(self, p):
-        """Warp's answer at one point (sign, closest (3,) float64, face), through the launch
+    def _run_one(self, p, inside_only=False):
+        """Warp's answer at one point (sign, closest (3,) float64, face), through the launches
         recorded at the end of build(); on the CPU the arrays are numpy views of Warp's memory."""
+        cmd = self._one_inside_cmd if inside_only else self._one_cmd
         if self.on_gpu:
-            s, c, f = self._run(np.array([p]), self._one, self._one_cmd)
+            s, c, f = self._run(np.array([p]), self._one, cmd, inside_only)
             return s[0], c[0], int(f[0])
         self._one_views[0][0] = p
-        self._one_cmd.launch()
+        cmd.launch()
+        if inside_only:
+            return self._one_views[1][0], None, -1
         s, c, f = self._one_views[1][0], self._one_views[2][0].astype(np.float64), int(self._one_views[3][0])
         if len(self.slivers) or f < 0:
             _, cs, fs = self._with_slivers(np.array([p]), None, c[None], np.array([f]))
@@ -237,7 +270,7 @@ class Method:
         return s, c, f
 
     def inside_one(self, p):
-        return bool(self._run_one(p)[0] < 0)
+        return bool(self._run_one(p, inside_only=True)[0] < 0)
 
     def distance_one(self, p):
         s, closest, t = self._run_one(p)
