@@ -10,8 +10,8 @@ by the method chosen with `sign`:
 - `raycast`: `mesh_query_point`, a majority vote over the orientation of the closest hit of three
   axis-aligned rays;
 - `normal`: `mesh_query_point_sign_normal`, the angle-weighted pseudonormal at the closest point;
-- `winding_number`: `mesh_query_point_sign_winding_number`, the fast winding number (`accuracy`,
-  `threshold`), the mesh built with its extra hierarchy.
+- `winding_number`: `mesh_query_point_sign_winding_number`, the fast winding number (`accuracy`;
+  inside above 1/2), the mesh built with its extra hierarchy.
 
 Inside with sign=parity and one ray is `mesh_query_ray_count_intersections` (Warp's documented
 inside test: an odd count of crossings along one ray), without the closest-point search that
@@ -20,8 +20,8 @@ edges of axis-aligned meshes). The other signs answer inside with their query's 
 
 A query set is one kernel launch (batch=true); a per-query row is one launch per point, replayed
 from a launch recorded once (`wp.launch(..., record_cmd=True)`, Warp's way to cut a repeated
-launch's cost) on arrays allocated once: what a Python caller of Warp pays per point. The kernels are compiled (or loaded
-from Warp's kernel cache) when the method is created, not in build().
+launch's cost) on arrays allocated once: what a Python caller of Warp pays per point. The kernels
+are compiled (or loaded from Warp's kernel cache) when the method is created, not in build().
 
 Slivers. Warp's closest-point search skips a triangle whose |(b - a) x (c - a)| is below 1e-6 of
 the sum of its squared edges (its "sliver detection", native/mesh.h), so a zero-area triangle that
