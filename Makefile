@@ -16,11 +16,12 @@ BVHBENCH    := $(BUILD_DIR)/bvhbench
 SUDO        := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 # Debian 12 packages the build needs (checked one by one; only the missing ones are installed).
-# python3-venv: Debian's python3 makes virtual environments only with it.
+# python3-venv: Debian's python3 makes virtual environments only with it. libusb-1.0-0: Open3D's
+# library links it (the open3d method).
 APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev \
-  python3-dev pybind11-dev
+  python3-dev pybind11-dev libusb-1.0-0
 # What only `make test` needs beyond them: a real browser, in which the report's HTML is opened.
 TEST_APT_PACKAGES := chromium
 

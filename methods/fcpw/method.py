@@ -7,11 +7,22 @@ point. The batch calls (find_closest_points on (N, 3), contains on a list of poi
 give lists of fcpw objects, filled and read one by one in Python: those loops are part of what a
 Python user of fcpw gets.
 `contains` needs a watertight mesh (fcpw's own warning); the sign of the distance is contains.
+
+Scale. fcpw's ray-triangle test (Moller-Trumbore, which `contains` counts crossings with along +x
+and +y) rejects a triangle whose determinant is at most FLT_EPSILON, an absolute threshold: the
+determinant is twice the triangle's area projected across the ray, so on a small model the rays
+miss real crossings. On the closed 1M bunny (0.25 across, triangles of ~1e-7 area) contains
+answers 584 of 599 inside points outside (docs/peers.md has the reproduction). fcpw's answers do
+not otherwise depend on the scale, so by default (rescale=true) the method hands fcpw the mesh
+and the queries multiplied by a power of two that makes the box's largest side about 1024:
+exact in float32 (only the exponent changes), and the closest point is scaled back exactly.
+rescale=false gives fcpw the coordinates as given, to show the library's own behaviour.
 """
 import fcpw  # here, not in build(): the import is not the structure's build time
 import numpy as np
 
-DESCRIPTION = "fcpw: BVH closest point and contains (float32; contains needs a watertight mesh)"
+DESCRIPTION = ("fcpw: BVH closest point and contains (float32; contains needs a watertight mesh; "
+               "coordinates rescaled by a power of two for its absolute ray epsilon)")
 REQUIRES = ["numpy", "fcpw"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
@@ -21,19 +32,32 @@ PARAMETERS = [
      "help": "fcpw's aggregate: a BVH by its split heuristic, or baseline (every triangle)"},
     {"name": "vectorize", "type": "boolean", "default": True,
      "help": "fcpw's wide (SIMD) BVH nodes"},
+    {"name": "rescale", "type": "boolean", "default": True, "role": "build",
+     "help": "hand fcpw the mesh and queries scaled by a power of two (exact in float32) to a box "
+             "~1024 across: its ray test's absolute epsilon misses crossings on small models "
+             "(false: the coordinates as given)"},
 ]
+
+# The size the mesh is scaled to (its box's largest side, within a factor of two).
+RESCALED_SIZE = 1024.0
 
 
 class Method:
-    def __init__(self, aggregate="bvh_surface_area", vectorize=True):
+    def __init__(self, aggregate="bvh_surface_area", vectorize=True, rescale=True):
         self.aggregate = aggregate
         self.vectorize = vectorize
+        self.rescale = rescale
 
     def build(self, V, F):
         if not len(F):
             raise NotImplementedError("fcpw cannot build a scene of no triangles")
         self.fcpw = fcpw
-        self.V = np.asfortranarray(V, dtype=np.float32)
+        self.scale = 1.0
+        side = float(np.max(V.max(axis=0) - V.min(axis=0)))
+        if self.rescale and side > 0:
+            self.scale = 2.0 ** round(np.log2(RESCALED_SIZE / side))
+        # float32(x) * 2^k == float32(x * 2^k): the same rounding as the mesh as given.
+        self.V = np.asfortranarray(V * self.scale, dtype=np.float32)
         self.F = np.asfortranarray(F, dtype=np.int32)
         self.scene = fcpw.scene_3D()
         self.scene.set_object_count(1)
@@ -48,14 +72,14 @@ class Method:
         self.interaction = fcpw.interaction_3D()
 
     def inside_one(self, p):
-        return bool(self.scene.contains(np.array(p, dtype=np.float32)))
+        return bool(self.scene.contains((np.array(p, dtype=np.float64) * self.scale).astype(np.float32)))
 
     def distance_one(self, p):
-        x = np.array(p, dtype=np.float32)
+        x = (np.array(p, dtype=np.float64) * self.scale).astype(np.float32)
         i = self.interaction
         self.scene.find_closest_point(x, i)
         t = i.primitive_index
-        closest = np.asarray(i.p, dtype=np.float64)
+        closest = np.asarray(i.p, dtype=np.float64) / self.scale
         # The distance from the point as given to the closest point found, in double (fcpw's own
         # i.d is float32 from the float32-rounded query).
         d = float(np.linalg.norm(closest - p))
@@ -66,14 +90,14 @@ class Method:
         # given (every point outside; measured on cow.obj: 0 of 71 inside points found), so the
         # list overload is used, which answers as contains(x) does.
         points = self.fcpw.float_3D_list()
-        for p in np.asarray(P, dtype=np.float32):
+        for p in (np.asarray(P, dtype=np.float64) * self.scale).astype(np.float32):
             points.append(p)
         result = self.fcpw.uint32_list()
         self.scene.contains(points, result)
         return np.fromiter(result, dtype=np.uint32, count=len(P)) != 0
 
     def distance(self, P):
-        Q = np.asfortranarray(P, dtype=np.float32)
+        Q = np.asfortranarray(np.asarray(P, dtype=np.float64) * self.scale, dtype=np.float32)
         found = self.fcpw.interaction_3D_list()
         self.scene.find_closest_points(Q, np.full(len(P), np.inf, dtype=np.float32), found)
         n = len(P)
@@ -82,6 +106,7 @@ class Method:
         for k, i in enumerate(found):
             closest[k] = i.p
             tri[k] = i.primitive_index
+        closest /= self.scale
         d = np.linalg.norm(closest - P, axis=1)  # in double, as distance_one
         inside = self.inside(P)
         return np.where(inside, -d, d), closest, self.face_normals[tri], tri
@@ -92,5 +117,5 @@ class Method:
         return int(self.V.nbytes + self.F.nbytes + self.face_normals.nbytes)
 
     def info(self):
-        return {"aggregate": self.aggregate, "vectorize": self.vectorize,
+        return {"aggregate": self.aggregate, "vectorize": self.vectorize, "scale": self.scale,
                 "structure_bytes": "geometry and normals only; BVH nodes not counted (not reported)"}

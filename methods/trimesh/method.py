@@ -7,6 +7,15 @@ The distance is what `ProximityQuery.signed_distance` computes (on_surface, then
 with the closest point and triangle kept, which signed_distance throws away. Inside is
 `contains_points`: the parity of a ray's crossings, so an open or self-intersecting mesh is
 answered as trimesh answers it (what the stability suite shows).
+
+Scale. on_surface (trimesh.proximity.closest_point) breaks near ties between a point's two closest
+candidates by their face normals, and calls two candidates tied when their SQUARED distances
+differ by less than tol.merge = 1e-8, an absolute tolerance: on a small model it picks a farther
+triangle. On the closed 1M bunny (0.25 across) the distance was up to 2.5e-4 of the diagonal off
+(docs/peers.md has the reproduction). trimesh works in double, so by default (rescale=true) the
+method gives trimesh the mesh and the queries multiplied by a power of two that makes the box's
+largest side about 1024 (exact: only the exponent changes) and divides the answers back;
+rescale=false gives trimesh the coordinates as given, to show the library's own behaviour.
 """
 import importlib.util
 
@@ -26,38 +35,52 @@ PARAMETERS = [
     {"name": "ray", "type": "choice", "default": "embree", "choices": ["embree", "native"],
      "help": "contains' ray backend: Embree through embreex (unsupported when embreex is not "
              "installed) or trimesh's own (rtree and numpy)"},
+    {"name": "rescale", "type": "boolean", "default": True, "role": "build",
+     "help": "hand trimesh the mesh and queries scaled by a power of two (exact) to a box ~1024 "
+             "across: on_surface's tie tolerance is absolute and picks farther triangles on small "
+             "models (false: the coordinates as given)"},
 ]
+
+# The size the mesh is scaled to (its box's largest side, within a factor of two).
+RESCALED_SIZE = 1024.0
 
 
 class Method:
-    def __init__(self, ray="embree"):
+    def __init__(self, ray="embree", rescale=True):
         self.ray_backend = ray
+        self.rescale = rescale
         if ray == "embree" and not HAS_EMBREEX:
             raise NotImplementedError("ray=embree needs the Python package embreex, not installed")
 
     def build(self, V, F):
         if not len(F):
             raise NotImplementedError("trimesh cannot answer on an empty mesh")
-        self.mesh = trimesh.Trimesh(vertices=V, faces=F, process=False, validate=False)
+        self.scale = 1.0
+        side = float(np.max(V.max(axis=0) - V.min(axis=0)))
+        if self.rescale and side > 0:
+            self.scale = 2.0 ** round(np.log2(RESCALED_SIZE / side))
+        self.mesh = trimesh.Trimesh(vertices=V * self.scale, faces=F, process=False, validate=False)
         if self.ray_backend == "embree":
             self.ray = ray_pyembree.RayMeshIntersector(self.mesh)
             self.ray._scene  # noqa: B018  built here, not by the first query
         else:
             self.ray = ray_triangle.RayMeshIntersector(self.mesh)
         self.mesh.triangles_tree  # noqa: B018  the rtree on_surface searches, built here
-        tri = self.mesh.triangles
+        tri = self.mesh.triangles / self.scale
         n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
         self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
 
     def inside(self, P):
-        return self.ray.contains_points(P)
+        return self.ray.contains_points(P * self.scale)
 
     def distance(self, P):
-        closest, d, tri = self.mesh.nearest.on_surface(P)
-        inside = self.ray.contains_points(P)
-        return np.where(inside, -d, d), closest, self.face_normals[tri], tri
+        Q = P * self.scale
+        closest, d, tri = self.mesh.nearest.on_surface(Q)
+        inside = self.ray.contains_points(Q)
+        d = d / self.scale
+        return np.where(inside, -d, d), closest / self.scale, self.face_normals[tri], tri
 
     def structure_bytes(self):
         # What this method holds as arrays; the rtree and the Embree scene are not counted
@@ -66,5 +89,5 @@ class Method:
         return int(m.vertices.nbytes + m.faces.nbytes + m.triangles.nbytes + self.face_normals.nbytes)
 
     def info(self):
-        return {"ray": self.ray_backend,
+        return {"ray": self.ray_backend, "scale": self.scale,
                 "structure_bytes": "arrays only; rtree and ray backend not counted (not reported)"}
