@@ -20,7 +20,7 @@ SUDO        := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev \
-  python3-dev pybind11-dev
+  python3-dev pybind11-dev valgrind
 
 .PHONY: help deps venv build test test-cpp test-python gate bench data stability large paper huge rebaseline fixture report clean distclean
 
@@ -65,7 +65,8 @@ test-cpp:
 test-python:
 	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(VPY) -m pytest tests/python
 
-# CI regression gate: counters, accuracy and statuses against results/baseline/ (timings reported only).
+# CI regression gate: counters, accuracy and statuses against results/baseline/ (timings reported only),
+# then instructions per query under valgrind against results/instr-baseline/ (docs/compare.md).
 gate:
 	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh; \
 	 else echo "gate: tools/ci_gate.sh not present yet; skipped"; fi
