@@ -268,11 +268,12 @@ def fingerprint_differences(a, b, prefix=""):
     return out
 
 
-def compare(base, new, fail=FAIL_DEFAULT, warn=WARN_DEFAULT):
-    """Rows (one per job) and a summary; `gated` is False when the fingerprints differ."""
+def compare(base, new, fail=FAIL_DEFAULT, warn=WARN_DEFAULT, only=None):
+    """Rows (one per job) and a summary; `gated` is False when the fingerprints differ. With
+    `only` (job ids), the baseline's other jobs are left out rather than counted missing."""
     diffs = fingerprint_differences(base["fingerprint"], new["fingerprint"])
     gated = not diffs
-    bjobs = {j["id"]: j for j in base["jobs"]}
+    bjobs = {j["id"]: j for j in base["jobs"] if only is None or j["id"] in only}
     njobs = {j["id"]: j for j in new["jobs"]}
     rows = []
     for jid in sorted(set(bjobs) | set(njobs)):
@@ -440,7 +441,7 @@ def cmd_gate(args):
         base = load_measurement(args.base)
         if base["fingerprint"] != new["fingerprint"]:
             print("instr_gate: the baseline was measured under another fingerprint: NOT GATED (see below)", file=sys.stderr)
-    return _report(compare(base, new, args.fail, args.warn), out)
+    return _report(compare(base, new, args.fail, args.warn, set(args.only) if args.only else None), out)
 
 
 def cmd_one(args):
