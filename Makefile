@@ -123,7 +123,7 @@ huge: build
 	$(VPY) plots/report.py results/huge
 
 rebaseline: build
-	@if [ -x tools/ci_gate.sh ]; then BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
+	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
 	 else echo "rebaseline: tools/ci_gate.sh not present yet"; exit 1; fi
 
 # The report tests' fixture is a real suite run; a change of parameters, job ids or result keys
