@@ -41,14 +41,16 @@ def git(repo, *args, check=True):
 
 def default_build_cmd(work, jobs):
     launcher = " -DCMAKE_CXX_COMPILER_LAUNCHER=ccache" if shutil.which("ccache") else ""
-    b = shlex.quote(str(Path(work) / "build"))
+    # build/ inside the checkout, as in a developer's tree: with CCACHE_BASEDIR set, ccache then
+    # serves every file the step's commit did not change.
+    b = "build"
     return (f"cmake -S . -B {b} -G Ninja -DCMAKE_BUILD_TYPE=Release{launcher} >/dev/null && "
-            f"cmake --build {b} -j {jobs} >/dev/null")
+            f"cmake --build {b} -j {jobs} --target bvhbench >/dev/null")
 
 
 def default_measure_cmd(work, job):
     return (f"{shlex.quote(sys.executable)} {shlex.quote(str(ROOT / 'tools' / 'instr_gate.py'))} one "
-            f"--exe {shlex.quote(str(Path(work) / 'build' / 'bvhbench'))} "
+            f"--exe {shlex.quote(str(Path(work) / 'src' / 'build' / 'bvhbench'))} "
             f"--jobs {shlex.quote(str(ROOT / 'suites' / 'ci_instructions.yml'))} --job {shlex.quote(job)} "
             f"--out {shlex.quote(str(Path(work) / 'measure'))}")
 

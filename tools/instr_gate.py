@@ -251,7 +251,7 @@ def load_measurement(path):
     try:
         doc = json.loads(p.read_text())
     except (OSError, ValueError) as e:
-        raise BrokenRun(f"{p}: cannot read: {e}")
+        raise BrokenRun(f"{p}: cannot read: {e} (no baseline? `make rebaseline` counts one; or gate with --base-ref)")
     if doc.get("schema") != SCHEMA:
         raise BrokenRun(f"{p}: not an instruction measurement (schema {doc.get('schema')!r}, expected {SCHEMA})")
     return doc
@@ -359,11 +359,13 @@ def build_commit(ref, work_dir, jobs_n=2):
                        capture_output=True)
     else:
         subprocess.run(["git", "-C", str(wt), "checkout", "--detach", "--force", sha], check=True, capture_output=True)
-    build = Path(work_dir) / "build"
+    # The build inside the checkout, as in a developer's tree: compiler lines then read the same
+    # relative to CCACHE_BASEDIR, and ccache serves the files the commit did not change.
+    build = wt / "build"
     cfg = ["cmake", "-S", str(wt), "-B", str(build), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release"]
     if shutil.which("ccache"):
         cfg.append("-DCMAKE_CXX_COMPILER_LAUNCHER=ccache")
-    for cmd in (cfg, ["cmake", "--build", str(build), "-j", str(jobs_n)]):
+    for cmd in (cfg, ["cmake", "--build", str(build), "-j", str(jobs_n), "--target", "bvhbench"]):
         p = subprocess.run(cmd, capture_output=True, text=True)
         if p.returncode != 0:
             raise BrokenRun(f"building {ref} ({sha[:10]}) failed: {' '.join(cmd)}\n{p.stdout[-3000:]}\n{p.stderr[-3000:]}")
