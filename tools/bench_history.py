@@ -31,6 +31,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def fmt(v):
+    v = float(f"{v:.6g}")  # a level is exp(log(x)): 999.9999999 is 1,000
+    return f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.4g}"
+
+
 # ---- step detection (asv-style, small) ----------------------------------------------------------
 
 def _l1_cost(seg):
@@ -164,8 +169,8 @@ def report(history, out):
                 pieces = detect_steps(vals, min_noise=floor)
                 steps = []
                 for (a, b, lvl), (a2, b2, lvl2) in zip(pieces, pieces[1:]):
-                    steps.append(f"{pts[a2][0]}: {lvl:,.4g} -> {lvl2:,.4g} ({lvl2 / lvl - 1:+.1%})")
-                md.append(f"| {job} | {len(pts)} | {vals[-1]:,.4g} | {'; '.join(steps) or 'none'} |")
+                    steps.append(f"{pts[a2][0]}: {fmt(lvl)} -> {fmt(lvl2)} ({lvl2 / lvl - 1:+.1%})")
+                md.append(f"| {job} | {len(pts)} | {fmt(vals[-1])} | {'; '.join(steps) or 'none'} |")
                 rel = [v / vals[0] for v in vals]
                 ax.plot(range(len(rel)), rel, marker=".", label=job if steps else None, alpha=0.9 if steps else 0.3)
                 if steps:
