@@ -22,8 +22,9 @@ APT_PACKAGES := cmake ninja-build g++ make pkg-config git python3 python3-venv \
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libembree-dev libopenvdb-dev libtbb-dev \
   libeigen3-dev libgtest-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev zlib1g-dev libssl-dev \
   python3-dev pybind11-dev libusb-1.0-0
-# What only `make test` needs beyond them: a real browser, in which the report's HTML is opened.
-TEST_APT_PACKAGES := chromium
+# What only `make test` needs beyond them: a real browser, in which the report's HTML is
+# opened, and valgrind, under which the gate counts instructions per query.
+TEST_APT_PACKAGES := chromium valgrind
 
 # One apt-get for the packages of $(1) that are not installed yet (checked one by one).
 define apt_install
@@ -84,7 +85,8 @@ test-cpp:
 test-python:
 	BVHBENCH_EXE=$(abspath $(BVHBENCH)) $(VPY) -m pytest tests/python
 
-# CI regression gate: counters, accuracy and statuses against results/baseline/ (timings reported only).
+# CI regression gate: counters, accuracy and statuses against results/baseline/ (timings reported only),
+# then instructions per query under valgrind against results/instr-baseline/ (docs/compare.md).
 gate:
 	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh; \
 	 else echo "gate: tools/ci_gate.sh not present yet; skipped"; fi
@@ -162,8 +164,8 @@ huge: build-runner
 	$(BVHBENCH) suite suites/huge.yml --out results/huge --resume
 	$(VPY) plots/report.py results/huge
 
-rebaseline: build
-	@if [ -x tools/ci_gate.sh ]; then BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
+rebaseline: build test-deps
+	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \
 	 else echo "rebaseline: tools/ci_gate.sh not present yet"; exit 1; fi
 
 # The report tests' fixture is a real suite run; a change of parameters, job ids or result keys

@@ -21,8 +21,10 @@
 #include "harness/io/query_set_io.hpp"
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
+#include "harness/run/counted_region.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/system_info.hpp"
+#include "harness/run/test_slowdown.hpp"
 #include "harness/run/thread_replay.hpp"
 #include "harness/util/atomic_file.hpp"
 #include "harness/util/errors.hpp"
@@ -132,6 +134,7 @@ void batch_call(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuf
 /// its wall time in seconds. The answers land in `batch`, so the call cannot be optimised away.
 double timed_batch_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& batch) {
   m.reset_path();
+  const CountedRegion counted;  // the instruction gate counts this pass (counted_region.hpp)
   auto t0 = Clock::now();
   batch_call(m, qt, pts, batch);
   auto t1 = Clock::now();
@@ -149,8 +152,8 @@ json run_job(const JobSpec& spec) {
   try {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 std::max(1, spec.threads));
-    auto method = Registry::global().create(spec.method);
     const MethodInfo* info = spec.method.info;
+    auto method = apply_test_slowdown(Registry::global().create(spec.method), info->name);  // unset: itself
     const Params& params = spec.method.params;
     r["job"]["method"] = info->name;
     r["job"]["params"] = params.values();

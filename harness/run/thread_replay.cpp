@@ -6,6 +6,7 @@
 #include <mutex>
 #include <string>
 
+#include "harness/run/counted_region.hpp"
 #include "harness/util/errors.hpp"
 
 namespace bvhbench {
@@ -128,6 +129,7 @@ std::vector<Counter> ThreadedReplay::counters() const {
 double ThreadedReplay::timed_pass() {
   reset_paths();
   std::vector<double> sinks(streams_.size());
+  const CountedRegion counted;  // the instruction gate counts this pass (counted_region.hpp)
   const double seconds = team_.run([&](int k) {
     Sink sink;
     replay(*states_[std::size_t(k)], type_, streams_[std::size_t(k)], [&](std::size_t, const auto& a) { sink.take(a); });
