@@ -17,10 +17,9 @@ of times, and nothing outside the box is inside whatever the mesh.
 """
 import numpy as np
 
-# Here, not in build(): the import (seconds) is not the structure's build time. Open3D 0.20's
-# module fails to initialise inside the `bvhbench` runner with "ImportError: std::bad_cast" (the
-# same venv imports it in Python and in the test binary's embedded interpreter): the method is
-# then `unsupported`, with that reason, rather than an error row per job.
+# Here, not in build(): the import (seconds) is not the structure's build time. A module that
+# cannot be imported in this process (docs/peers.md, "Open3D inside the runner") makes the method
+# `unsupported`, with the import's reason, rather than an error row per job.
 try:
     import open3d as o3d
     IMPORT_ERROR = None

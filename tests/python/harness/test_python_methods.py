@@ -316,8 +316,9 @@ def test_library_methods_answer_like_the_oracle(host, data, tmp_path, spec, exac
     # each run starts Python and builds the structure, so two runs per row keep the test short).
     for kind, query in (("random", "inside"), ("haptic", "distance")):
         p, r, a = run_job(None, spec, query, data, tmp_path, kind=kind)
-        if r["status"] == "unsupported":  # trimesh's Embree rays without embreex; Open3D's import
-            assert "embreex" in r["message"] or "cannot be imported in this process" in r["message"], r["message"]
+        if r["status"] == "unsupported":  # trimesh's Embree rays without embreex
+            # (Open3D once could not be imported inside the runner: CMakeLists.txt, -fPIC.)
+            assert "embreex" in r["message"], r["message"]
             pytest.skip(r["message"])
         assert r["status"] == "ok", r["message"]
         assert r["queries"]["batch"] is batch
