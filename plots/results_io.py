@@ -17,7 +17,7 @@ from collections import OrderedDict
 import result_schema
 
 OK = "ok"
-KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oom", "error")
+KNOWN_STATUSES = result_schema.STATUSES  # harness/run/result_schema.json: the one list
 
 # Method order in legends and tables: the star first, then peers, then anything new (sorted).
 METHOD_ORDER = ["ebp_octree", "cgal_aabb", "embree", "openvdb", "brute_force"]

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
+#include "harness/core/batch_answers.hpp"
 #include "harness/core/mesh.hpp"
 #include "harness/core/query_set.hpp"
 #include "harness/core/registry.hpp"
@@ -112,7 +113,7 @@ struct BatchBuffers {
 };
 
 /// One call answering every point, checked for the count of answers it gave.
-void batch_call(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& out) {
+void batch_call(BatchAnswers& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& out) {
   if (qt == QueryType::inside) {
     out.inside.assign(pts.size(), 0);
     m.inside_batch(pts, out.inside);
@@ -130,8 +131,9 @@ void batch_call(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuf
 
 /// One timed pass of a batch method (one call answering every point, path reset first, untimed):
 /// its wall time in seconds. The answers land in `batch`, so the call cannot be optimised away.
-double timed_batch_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& batch) {
-  m.reset_path();
+double timed_batch_pass(Method& method, BatchAnswers& m, QueryType qt, const std::vector<Vec3d>& pts,
+                        BatchBuffers& batch) {
+  method.reset_path();
   auto t0 = Clock::now();
   batch_call(m, qt, pts, batch);
   auto t1 = Clock::now();
@@ -165,7 +167,7 @@ json run_job(const JobSpec& spec) {
                            {"seed", qs.meta.value("seed", json(nullptr))},
                            {"mesh_sha256", qs.meta.value("mesh_sha256", json(nullptr))}};
 
-    if (!method->supports(spec.query_type)) {
+    if (!answers(*info, *method, spec.query_type)) {
       fail(status::unsupported, info->name + " does not answer " + to_string(spec.query_type) +
                                     " queries" +
                                     (params.non_default_string().empty()
@@ -211,8 +213,6 @@ json run_job(const JobSpec& spec) {
     for (const auto& path : probe_points)  // every probe's path: methods size bands and caches from it
       for (const Vec3d& p : path) ctx.query_bounds.add(p);
     ctx.query_kind = qs.kind();
-    ctx.tmp_dir = spec.tmp_dir;
-    ctx.memory_budget_bytes = spec.memory_budget_bytes;
     const std::size_t mesh_bytes = mesh.bytes();
     reset_peak_rss();
     auto b0 = Clock::now();
@@ -224,6 +224,14 @@ json run_job(const JobSpec& spec) {
                   {"structure_bytes", structure_bytes},
                   {"peak_rss_bytes", build_peak}};
     r["structure"] = method->info();
+    // A structure read from a file (a store) was built with options of its own: those ran, and
+    // those are recorded (the spec's params_key, which names the file, stays the job's key).
+    if (const auto read = method->build_options_read(); !read.empty()) {
+      r["job"]["params"] = params.with_values(info->name, info->params, read).values();
+      json keys = json::array();
+      for (const auto& kv : read) keys.push_back(kv.first);
+      r["job"]["params_read_from_structure"] = keys;
+    }
 
     // The method keeps what it needs: release the mesh so query memory is the method's own.
     { Mesh released = std::move(mesh); }
@@ -239,13 +247,14 @@ json run_job(const JobSpec& spec) {
     Answers answers;
     // A batch method (a Python method's batch=true) answers the whole set in one call; it declares
     // no concurrent queries, so it runs on one thread (threads > 1 was refused above).
-    const bool batch = method->answers_in_batches();
+    BatchAnswers* const batcher = batch_answers(*method);
+    const bool batch = batcher != nullptr;
     BatchBuffers batch_buffers;
     if (batch) {
       answers.resize(spec.query_type, n);
       method->reset_counters();
       method->reset_path();
-      batch_call(*method, spec.query_type, pts, batch_buffers);
+      batch_call(*batcher, spec.query_type, pts, batch_buffers);
       if (spec.query_type == QueryType::inside) {
         answers.inside = batch_buffers.inside;
       } else {
@@ -280,7 +289,7 @@ json run_job(const JobSpec& spec) {
     Progress qprog("querying " + info->name + (spec.threads > 1 ? " on " + std::to_string(spec.threads) + " threads" : ""),
                    spec.repeat * (with_single ? 2 : 1) + 1, spec.progress);
     for (int rep = 0; rep < spec.repeat; ++rep) {
-      double s = batch ? timed_batch_pass(*method, spec.query_type, pts, batch_buffers) : replay.timed_pass();
+      double s = batch ? timed_batch_pass(*method, *batcher, spec.query_type, pts, batch_buffers) : replay.timed_pass();
       pass_seconds.push_back(s);
       qps.push_back(s > 0 ? double(total) / s : 0.0);
       query_rss = std::max(query_rss, current_rss_bytes());

@@ -353,7 +353,6 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
     this->start_queries();
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override {
     return geometry_bytes() + tree_bytes() + s_.kd_bytes;
@@ -398,7 +397,8 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   m.description =
       "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
       "Side_of_triangle_mesh's ray parity on the same tree";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread hint and counters over the const trees
   // None: CGAL is header-only and compiled here with our flags, with no run-time CPU dispatch;
   // the traversal and its filtered predicates run in plain double (interval filters under our
@@ -406,16 +406,18 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   // gives the same answer on any kernel). The counts depend on the input and the build alone.
   m.machine_dependent_counters = {};
   m.params = {
-      {"kernel", ParamType::choice, "epick",
+      {"kernel", ParamType::choice, ParamRole::build, "epick",
        "geometric kernel: epick (exact predicates) or simple_cartesian (Simple_cartesian<double>)",
        {"epick", "simple_cartesian"}},
-      {"kd_tree", ParamType::boolean, "true",
+      {"kd_tree", ParamType::boolean, ParamRole::build, "true",
        "accelerate_distance_queries: hint each distance query with the KD-tree's nearest vertex", {}},
-      {"coherent", ParamType::boolean, "false",
+      {"coherent", ParamType::boolean, ParamRole::query, "false",
        "hint each distance query with the previous closest point and triangle (haptic paths)", {}},
-      {"threads", ParamType::integer, "1",
+      {"threads", ParamType::integer, ParamRole::build, "1",
        "recorded only: CGAL 5.5 builds and queries this tree sequentially", {}, 1, 1024},
   };
+  // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
+  m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     Options o;
     o.kernel = p.get("kernel");

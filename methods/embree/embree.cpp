@@ -369,7 +369,6 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
     start_queries();
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override { return buffer_bytes() + s_->bvh_bytes; }
 
@@ -420,7 +419,8 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
   m.description =
       "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
       "by all-hits ray parity with jittered re-shots and majority vote";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread query contexts, hit lists and counters over the committed scene
   // Embree picks its kernels (SSE2, SSE4.2, AVX, AVX2, AVX-512) from the processor when the
   // device is made, and with them the BVH it builds (BVH8 where it may use AVX, else BVH4; on
@@ -447,20 +447,22 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
   // coherent seed radius found nothing, which the margin in search_radius() rules out whatever
   // the rounding of Embree's box tests (a change is a broken margin, worth failing the gate).
   m.params = {
-      {"quality", ParamType::choice, "medium", "BVH build quality (high = spatial splits)",
+      {"quality", ParamType::choice, ParamRole::build, "medium", "BVH build quality (high = spatial splits)",
        {"low", "medium", "high"}},
-      {"robust", ParamType::boolean, "true",
+      {"robust", ParamType::boolean, ParamRole::build, "true",
        "RTC_SCENE_FLAG_ROBUST: watertight ray-triangle tests (no ray slips between neighbours)", {}},
-      {"rays", ParamType::choice, "1", "rays per inside test, majority vote", {"1", "3", "5"}},
-      {"coherent", ParamType::boolean, "false",
+      {"rays", ParamType::integer, ParamRole::query, "1", "rays per inside test, majority vote", {"1", "3", "5"}},
+      {"coherent", ParamType::boolean, ParamRole::query, "false",
        "seed the point-query radius with the distance to the previous closest point", {}},
-      {"threads", ParamType::integer, "1", "Embree device threads (build)", {}, 1, 1024},
+      {"threads", ParamType::integer, ParamRole::build, "1", "Embree device threads (build)", {}, 1, 1024},
   };
+  // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
+  m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     Options o;
     o.quality = p.get("quality");
     o.robust = p.get_bool("robust");
-    o.rays = std::stoi(p.get("rays"));
+    o.rays = int(p.get_int("rays"));
     o.coherent = p.get_bool("coherent");
     o.threads = int(p.get_int("threads"));
     return std::make_unique<Embree>(o);

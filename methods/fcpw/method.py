@@ -15,13 +15,17 @@ DESCRIPTION = "fcpw: BVH closest point and contains (float32; contains needs a w
 REQUIRES = ["numpy", "fcpw"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "aggregate", "type": "choice", "default": "bvh_surface_area",
+    {"name": "aggregate", "type": "choice", "role": "build", "default": "bvh_surface_area",
      "choices": ["bvh_surface_area", "bvh_overlap_surface_area", "bvh_volume",
                  "bvh_overlap_volume", "bvh_longest_axis_center", "baseline"],
      "help": "fcpw's aggregate: a BVH by its split heuristic, or baseline (every triangle)"},
-    {"name": "vectorize", "type": "boolean", "default": True,
+    {"name": "vectorize", "type": "boolean", "role": "build", "default": True,
      "help": "fcpw's wide (SIMD) BVH nodes"},
 ]
+
+# The default sweep of a `methods: all` suite (methods/README.md): in batches, what a Python
+# caller gets from arrays (one call per point costs the interpreter in every query).
+SWEEP = ["batch=true"]
 
 
 class Method:
