@@ -1,6 +1,7 @@
 #pragma once
-/// One job: load the mesh, build one method, replay one query set, measure, write the result
-/// JSON of the contract (docs/results.md) and optionally the answers.
+/// One job: load the mesh, build one method, replay one query set (measured by the protocol of
+/// query_protocol.hpp), and assemble the result JSON of the contract (docs/results.md) and
+/// optionally the answers.
 #include <string>
 
 #include <nlohmann/json.hpp>

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -100,7 +101,8 @@ def test_methods_all_is_every_method_with_its_declared_sweep(toy_env, tmp_path):
         if m["testing_only"]:
             continue
         for entry in m["sweep"]:
-            expected.add("cow__random-n60-s1__inside__" + (name if not entry else f"{name}_{entry}"))
+            spec = name if not entry else f"{name}:{entry}"
+            expected.add("cow__random-n60-s1__inside__" + re.sub(r"[^A-Za-z0-9.=_-]", "_", spec))
     assert set(ids) == expected
     # The toy's own sweep, as its folder declares it (the spec as written: 0.50 stays in the id).
     assert "cow__random-n60-s1__inside__sweepy" in ids
