@@ -21,6 +21,7 @@
 #include "harness/io/query_set_io.hpp"
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
+#include "harness/run/dataset_manifest.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/query_protocol.hpp"
 #include "harness/run/system_info.hpp"
@@ -208,6 +209,8 @@ json run_job(const JobSpec& spec) {
                         {"triangles", mesh.num_triangles()},
                         {"vertices", mesh.vertices.size()},
                         {"diagonal", diagonal}};
+    // How the mesh was made, where its dataset's manifest says (a stress case, a real model, ...).
+    if (json d = dataset_entry(mesh.path, mesh.sha256); !d.is_null()) r["job"]["mesh"]["dataset"] = d;
     if (qs.meta.contains("mesh_sha256") && qs.meta["mesh_sha256"] != mesh.sha256)
       r["job"]["queries"]["mesh_mismatch"] = true;
 
