@@ -29,6 +29,9 @@ nlohmann::json method_json(const MethodInfo& m) {
                        {"coherence", m.caps.coherence},
                        {"out_of_core", m.caps.out_of_core},
                        {"concurrent_queries", m.caps.concurrent_queries}};
+  j["build_threads"] = m.caps.build_threads == BuildThreads::job   ? "job"
+                       : m.caps.build_threads == BuildThreads::one ? "one"
+                                                                   : "library";
   j["testing_only"] = m.testing_only;
   nlohmann::json ps = nlohmann::json::array();
   const auto defaults = canonical_defaults(m);
@@ -82,7 +85,12 @@ void add_methods_command(CLI::App& app) {
       add(m.caps.concurrent_queries, "concurrent-queries");
       std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
                 << "  " << m.description << "\n"
-                << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n";
+                << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n"
+                << "  build threads: "
+                << (m.caps.build_threads == BuildThreads::job   ? "the job's (--threads)"
+                    : m.caps.build_threads == BuildThreads::one ? "one"
+                                                                : "the library's own choice")
+                << "\n";
       std::string machine;
       for (auto& c : m.machine_dependent_counters) machine += (machine.empty() ? "" : ", ") + c;
       std::cout << "  machine-dependent counters: "

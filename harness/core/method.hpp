@@ -43,6 +43,10 @@ struct DistanceResult {
   std::int64_t triangle = -1;  ///< index of the closest triangle in the input mesh, -1 if unknown
 };
 
+/// Whose threads build the structure: the job's build threads (a job's T, the same for every
+/// method that can use them), one thread, or threads a library picks by itself (unknown here).
+enum class BuildThreads { job, one, library };
+
 struct Capabilities {
   bool inside = false;
   bool distance = false;
@@ -52,6 +56,8 @@ struct Capabilities {
   /// Hands out per-thread query states (Method::new_query_state): runs at threads > 1. Declared
   /// here so that `bvhbench methods` and a suite can tell before building; false by default.
   bool concurrent_queries = false;
+  /// What a result records as build.threads: T, 1, or null (the library's own choice).
+  BuildThreads build_threads = BuildThreads::one;
 };
 
 /// A named work counter, summed over the queries since reset_counters().

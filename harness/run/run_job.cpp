@@ -240,7 +240,10 @@ json run_job(const JobSpec& spec) {
     const std::size_t structure_bytes = method->structure_bytes();
     r["build"] = {{"seconds", std::chrono::duration<double>(b1 - b0).count()},
                   {"structure_bytes", structure_bytes},
-                  {"peak_rss_bytes", build_peak}};
+                  {"peak_rss_bytes", build_peak},
+                  {"threads", info->caps.build_threads == BuildThreads::job   ? json(spec.threads)
+                              : info->caps.build_threads == BuildThreads::one ? json(1)
+                                                                              : json(nullptr)}};
     r["structure"] = method->info();
     // A structure read from a file (a store) was built with options of its own: those ran, and
     // those are recorded (the spec's params_key, which names the file, stays the job's key).

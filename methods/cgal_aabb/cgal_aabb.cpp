@@ -25,8 +25,8 @@
 //    point is the segment or point they collapse to), but the ray test skips them: CGAL's
 //    ray-triangle predicate has the precondition "triangle not degenerate" (an assertion in
 //    debug builds), and a zero-area triangle cannot change a ray's parity anyway.
-//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially; `threads` is accepted for
-//    uniform sweeps and recorded, it changes nothing there. Queries run on the job's threads: both
+//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially: the registration says so
+//    (no caps.parallel_build), and a result records build.threads 1. Queries run on the job's threads: both
 //    trees are const once built (built here, never lazily by a query), traversals are const, and
 //    each thread's query state keeps its own hint and counters (CgalQueries).
 #include <CGAL/AABB_primitive.h>
@@ -163,7 +163,6 @@ struct Options {
   std::string kernel;
   bool kd_tree = true;
   bool coherent = false;
-  int threads = 1;
 };
 
 /// The built structure, shared read-only by every thread's queries (CGAL's AABB_tree and its
@@ -366,8 +365,7 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
             {"node_bytes", sizeof(CGAL::AABB_node<Traits>)},
             {"primitive_bytes", sizeof(Primitive)},
             {"kd_tree_built", s_.kd_built},
-            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", s_.kd_bytes}}},
-            {"threads_effective", 1}};
+            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", s_.kd_bytes}}}};
   }
 
  private:
@@ -413,8 +411,6 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
        "accelerate_distance_queries: hint each distance query with the KD-tree's nearest vertex", {}},
       {"coherent", ParamType::boolean, ParamRole::query, "false",
        "hint each distance query with the previous closest point and triangle (haptic paths)", {}},
-      {"threads", ParamType::integer, ParamRole::build, "1",
-       "recorded only: CGAL 5.5 builds and queries this tree sequentially", {}, 1, 1024},
   };
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
   m.sweep = {"", "coherent=true"};
@@ -423,7 +419,6 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
     o.kernel = p.get("kernel");
     o.kd_tree = p.get_bool("kd_tree");
     o.coherent = p.get_bool("coherent");
-    o.threads = int(p.get_int("threads"));
     if (o.kernel == "simple_cartesian")
       return std::make_unique<CgalAabb<CGAL::Simple_cartesian<double>>>(o);
     return std::make_unique<CgalAabb<CGAL::Exact_predicates_inexact_constructions_kernel>>(o);

@@ -219,6 +219,7 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   // In memory one ebp::Query per thread over the const tree; out of core one page cache per thread
   // over the shared store reader (ooc_method.cpp says why).
   m.caps.concurrent_queries = true;
+  m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
   // A store carries the build options it was made with (its header; the result records those):

@@ -270,8 +270,7 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
         renormalize_(p.get_bool("renormalize")),
         remove_intersecting_(p.get_bool("isect_cleanup")),
         max_voxels_(double(p.get_int("max_voxels"))),
-        fit_(p.get_bool("fit")),
-        threads_(int(p.get_int("threads"))) {}
+        fit_(p.get_bool("fit")) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     // Without a triangle there is no surface to sample, whatever the query (the voxel size of
@@ -320,9 +319,7 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
   void build_impl(const Mesh& mesh, const BuildContext& ctx) {
     index_.reset();
     sdf_.reset();
-    std::optional<tbb::global_control> limit;
-    if (threads_ > 0)  // can only lower the job's budget: TBB keeps the smallest active limit
-      limit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads_));
+    // meshToVolume builds on TBB, which the job limits to its build threads (run_job).
 
     const Box3d mb = mesh.bounds();
     const double diag = mb.diagonal();
@@ -431,7 +428,6 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
   double max_voxels_;
   bool fit_;
   double voxel_requested_ = 0;
-  int threads_;
 
   // the structure (grids before their accessors: accessors are destroyed first)
   FloatGrid::Ptr sdf_;
@@ -459,6 +455,7 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true;
   m.caps.concurrent_queries = true;  // per-thread value accessors over grids nobody writes
+  m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   // None: our counters count our own samples of the grid, whose values meshToVolume computes in
   // header templates compiled here (no run-time CPU dispatch: OPENVDB_USE_SSE42/AVX are
   // compile-time switches, off; libopenvdb itself has no CPUID or ifunc). Each voxel's distance
@@ -481,7 +478,6 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
        "meshToVolume removal of self-intersection voxels (off: DISABLE_INTERSECTING_VOXEL_REMOVAL)", {}},
       {"max_voxels", ParamType::integer, ParamRole::build, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
       {"fit", ParamType::boolean, ParamRole::build, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
-      {"threads", ParamType::integer, ParamRole::build, "0", "build threads; 0 = the job's --threads (a value can only lower it)", {}, 0, 1024},
   };
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));

@@ -55,6 +55,7 @@ MethodInfo method_info(const py::dict& d, const std::string& folder) {
   decl.caps.distance = caps["distance"].cast<bool>();
   decl.caps.closest_triangle = caps["closest_triangle"].cast<bool>();
   m.caps = decl.caps;
+  m.caps.build_threads = BuildThreads::library;  // numpy and the library pick their own
   for (auto p : d["parameters"].cast<py::list>()) {
     py::dict pd = p.cast<py::dict>();
     ParamSpec s;
