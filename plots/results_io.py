@@ -184,12 +184,12 @@ class Job:
         return isinstance(self.get("accuracy"), dict)
 
     def is_stress(self):
-        """Is the job's mesh a stress case? As the dataset manifest says (job.mesh.dataset.kind,
-        recorded by the runner where the manifest beside the mesh lists these very bytes); the
-        mesh's name only for results made without a manifest."""
+        """Is the job's mesh a stress case? As the dataset manifest says (job.mesh.dataset: kind
+        stress, or not closed; recorded by the runner where the manifest beside the mesh lists
+        these very bytes); the mesh's name only for results made without a manifest."""
         kind = self.get("job.mesh.dataset.kind")
-        if isinstance(kind, str):
-            return kind == "stress"
+        if isinstance(kind, str):  # a stress case by construction, or an open mesh (a scan)
+            return kind == "stress" or self.get("job.mesh.dataset.closed") is False
         return bool(STRESS_NAME_RE.search(self.mesh))
 
 

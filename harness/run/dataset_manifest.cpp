@@ -28,9 +28,11 @@ json dataset_entry(const std::string& mesh_path, const std::string& sha256) {
     const json& kind = e.contains("kind") ? e["kind"] : json();
     const json& family = e.contains("family") ? e["family"] : json();
     if (!kind.is_string() || !family.is_string()) return nullptr;
-    return {{"kind", printable(kind.get<std::string>())},
-            {"family", printable(family.get<std::string>())},
-            {"manifest", printable(manifest.string())}};
+    json out = {{"kind", printable(kind.get<std::string>())},
+                {"family", printable(family.get<std::string>())},
+                {"manifest", printable(manifest.string())}};
+    if (e.contains("closed") && e["closed"].is_boolean()) out["closed"] = e["closed"];
+    return out;
   }
   return nullptr;
 }

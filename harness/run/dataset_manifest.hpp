@@ -9,7 +9,7 @@
 
 namespace bvhbench {
 
-/// {"family", "kind", "manifest"} of the entry of `mesh_path`'s folder's manifest.json whose file
+/// {"family", "kind", "manifest", and "closed" when it says} of the entry of `mesh_path`'s folder's manifest.json whose file
 /// is that mesh and whose sha256 is `sha256` (so that the manifest describes these very bytes);
 /// null when there is no manifest, it cannot be read, or it has no such entry.
 nlohmann::json dataset_entry(const std::string& mesh_path, const std::string& sha256);
