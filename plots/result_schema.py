@@ -26,6 +26,7 @@ _SCHEMA = _load()
 VERSION = _SCHEMA["schema"]
 FIELDS = _SCHEMA["fields"]                 # dotted path -> {type, required, doc}
 SUMMARY_COLUMNS = _SCHEMA["summary_csv"]   # [{column, field | ratio | share, or_stem_of?}]
+STATUSES = tuple(FIELDS["status"]["enum"])  # the job statuses: the schema's one list of them
 _PATTERNS = [(tuple(p.split(".")), p) for p in FIELDS]
 
 
@@ -108,6 +109,8 @@ def problems(result):
             out.append(f"{path}: not described by the schema")
         elif not has_type(value, entry["type"]):
             out.append(f"{path}: must be {entry['type']}")
+        elif "enum" in entry and isinstance(value, str) and value not in entry["enum"]:
+            out.append(f"{path}: {value!r} is none of {', '.join(entry['enum'])}")
     for path, entry in FIELDS.items():
         keys = path.split(".")
         if "*" in keys or entry["required"] == "optional":

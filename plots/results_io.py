@@ -17,12 +17,13 @@ from collections import OrderedDict
 import result_schema
 
 OK = "ok"
-KNOWN_STATUSES = ("ok", "unsupported", "rejected_input", "crash", "timeout", "oom", "error")
+KNOWN_STATUSES = result_schema.STATUSES  # harness/run/result_schema.json: the one list
 
 # Method order in legends and tables: the star first, then peers, then anything new (sorted).
 METHOD_ORDER = ["ebp_octree", "cgal_aabb", "embree", "openvdb", "brute_force"]
 
-# Names that mark a mesh as a stress case (degenerate, broken, adversarial input).
+# Names that mark a mesh as a stress case (degenerate, broken, adversarial input): only for
+# results that do not carry the dataset manifest's kind (job.mesh.dataset.kind; Job.is_stress).
 STRESS_NAME_RE = re.compile(
     r"stress|stability|degenerate|(^|_)open(_|$)|nonmanifold|non_manifold|self_?intersect|"
     r"sliver|needle", re.IGNORECASE)
@@ -183,7 +184,12 @@ class Job:
         return isinstance(self.get("accuracy"), dict)
 
     def is_stress(self):
-        """Does the job's mesh name say it is a stress case?"""
+        """Is the job's mesh a stress case? As the dataset manifest says (job.mesh.dataset: kind
+        stress, or not closed; recorded by the runner where the manifest beside the mesh lists
+        these very bytes); the mesh's name only for results made without a manifest."""
+        kind = self.get("job.mesh.dataset.kind")
+        if isinstance(kind, str):  # a stress case by construction, or an open mesh (a scan)
+            return kind == "stress" or self.get("job.mesh.dataset.closed") is False
         return bool(STRESS_NAME_RE.search(self.mesh))
 
 

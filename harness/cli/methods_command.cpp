@@ -1,6 +1,7 @@
 // `bvhbench methods`: what is registered, what it answers, which of its counters depend on the
-// machine, its parameters with defaults.
+// machine, its options (type, role, default) and the default sweep a `methods: all` suite runs.
 #include <iomanip>
+#include <map>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,11 @@ namespace bvhbench {
 
 namespace {
 
+/// Every option's default as results record it (canonical: a real declared "1.0" is "1").
+std::map<std::string, std::string> canonical_defaults(const MethodInfo& m) {
+  return Params::resolve(m.name, m.params, {}).values();
+}
+
 nlohmann::json method_json(const MethodInfo& m) {
   nlohmann::json j;
   j["name"] = m.name;
@@ -23,14 +29,24 @@ nlohmann::json method_json(const MethodInfo& m) {
                        {"coherence", m.caps.coherence},
                        {"out_of_core", m.caps.out_of_core},
                        {"concurrent_queries", m.caps.concurrent_queries}};
+  j["build_threads"] = m.caps.build_threads == BuildThreads::job   ? "job"
+                       : m.caps.build_threads == BuildThreads::one ? "one"
+                                                                   : "library";
   j["testing_only"] = m.testing_only;
   nlohmann::json ps = nlohmann::json::array();
+  const auto defaults = canonical_defaults(m);
   for (auto& p : m.params) {
-    nlohmann::json pj = {{"name", p.name}, {"type", to_string(p.type)}, {"default", p.default_value}, {"help", p.help}};
+    nlohmann::json pj = {{"name", p.name},                  {"type", to_string(p.type)}, {"role", to_string(p.role)},
+                         {"default", defaults.at(p.name)}, {"help", p.help}};
     if (!p.choices.empty()) pj["choices"] = p.choices;
+    if (p.type == ParamType::integer || p.type == ParamType::real) {
+      if (p.min > -1e308) pj["min"] = p.min;
+      if (p.max < 1e308) pj["max"] = p.max;
+    }
     ps.push_back(pj);
   }
   j["params"] = ps;
+  j["sweep"] = m.sweep;  // what a suite's `methods: all` runs of it
   // Counters compare gates exactly only against a baseline of the same machine fingerprint.
   j["machine_dependent_counters"] = m.machine_dependent_counters;
   return j;
@@ -69,7 +85,12 @@ void add_methods_command(CLI::App& app) {
       add(m.caps.concurrent_queries, "concurrent-queries");
       std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
                 << "  " << m.description << "\n"
-                << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n";
+                << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n"
+                << "  build threads: "
+                << (m.caps.build_threads == BuildThreads::job   ? "the job's (--threads)"
+                    : m.caps.build_threads == BuildThreads::one ? "one"
+                                                                : "the library's own choice")
+                << "\n";
       std::string machine;
       for (auto& c : m.machine_dependent_counters) machine += (machine.empty() ? "" : ", ") + c;
       std::cout << "  machine-dependent counters: "
@@ -77,15 +98,19 @@ void add_methods_command(CLI::App& app) {
                                     : machine + " (gated only against a baseline of the same machine fingerprint)")
                 << "\n";
       if (m.params.empty()) std::cout << "  parameters: none\n";
+      const auto defaults = canonical_defaults(m);
       for (auto& p : m.params) {
         std::string type = to_string(p.type);
-        if (p.type == ParamType::choice) {
+        if (!p.choices.empty()) {
           type.clear();
           for (auto& c : p.choices) type += (type.empty() ? "" : "|") + c;
         }
         std::cout << "  " << std::left << std::setw(18) << p.name << std::setw(22)
-                  << ("= " + p.default_value) << "(" << type << ") " << p.help << "\n";
+                  << ("= " + defaults.at(p.name)) << "(" << type << ", " << to_string(p.role) << ") " << p.help << "\n";
       }
+      std::string sweep;
+      for (const auto& e : m.sweep) sweep += (sweep.empty() ? "" : "; ") + (e.empty() ? std::string("defaults") : e);
+      std::cout << "  methods: all runs: " << (m.sweep.empty() ? "none (not in methods: all)" : sweep) << "\n";
       std::cout << "\n";
     }
     for (const auto& note : reg.notes()) std::cout << "note: " << note << "\n";

@@ -21,7 +21,6 @@ void add_run_command(CLI::App& app) {
   auto spec = std::make_shared<JobSpec>();
   auto out = std::make_shared<std::string>();
   auto query = std::make_shared<std::string>("inside");
-  auto budget_mb = std::make_shared<double>(0);
   auto quiet = std::make_shared<bool>(false);
   auto method = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand("run", "Run one job: build one method on one mesh, replay one query set");
@@ -37,15 +36,12 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--truth", spec->truth_path, "Oracle .npz (bvhbench truth) -> accuracy block");
   cmd->add_option("--answers", spec->answers_path, "Write the per-query answers to this .npz");
   cmd->add_option("--out", *out, "Result JSON (default: stdout)");
-  cmd->add_option("--tmp", spec->tmp_dir, "Folder for temporary files of out-of-core builds");
-  cmd->add_option("--memory-budget", *budget_mb, "Build memory budget in MiB (0 = none)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--deadline-ns", spec->deadline_ns, "Per-query deadline (haptic loop: 1e6 ns)");
   cmd->add_flag("--quiet", *quiet, "No progress on stderr");
   cmd->callback([=] {
     // Parsed once, here; a spec that cannot be resolved is the job's rejected_input result.
     spec->method = Registry::global().describe(*method);
     spec->query_type = parse_query_type(*query);
-    spec->memory_budget_bytes = std::size_t(*budget_mb * 1024 * 1024);
     spec->progress = !*quiet;
     json r = run_job(*spec);
     if (out->empty()) std::cout << dump_result(r) << std::endl;

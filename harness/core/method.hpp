@@ -16,6 +16,7 @@
 /// its own part of the queries through its own state, with its own path state and counters. A
 /// method that hands out none is `unsupported` for T > 1: never run from two threads at once.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,10 @@ struct DistanceResult {
   std::int64_t triangle = -1;  ///< index of the closest triangle in the input mesh, -1 if unknown
 };
 
+/// Whose threads build the structure: the job's build threads (a job's T, the same for every
+/// method that can use them), one thread, or threads a library picks by itself (unknown here).
+enum class BuildThreads { job, one, library };
+
 struct Capabilities {
   bool inside = false;
   bool distance = false;
@@ -51,6 +56,8 @@ struct Capabilities {
   /// Hands out per-thread query states (Method::new_query_state): runs at threads > 1. Declared
   /// here so that `bvhbench methods` and a suite can tell before building; false by default.
   bool concurrent_queries = false;
+  /// What a result records as build.threads: T, 1, or null (the library's own choice).
+  BuildThreads build_threads = BuildThreads::one;
 };
 
 /// A named work counter, summed over the queries since reset_counters().
@@ -65,8 +72,9 @@ struct BuildContext {
   QueryType query_type = QueryType::inside;  ///< what will be asked: build only what it needs
   Box3d query_bounds;                    ///< box of the query points (to size bands, caches)
   std::string query_kind;                ///< "random", "haptic", ... (informative)
-  std::string tmp_dir;                   ///< for out-of-core builds
-  std::size_t memory_budget_bytes = 0;   ///< 0 = no budget given
+  // No temporary folder or memory budget: no method builds out of core inside a job. The
+  // EBP-Octree's out-of-core build is `bvhbench ebp build --memory-budget --tmp`, whose store a
+  // job then reads (ebp_octree:store=FILE).
   Progress* progress = nullptr;          ///< optional; methods may create their own
 };
 
@@ -99,19 +107,10 @@ class Method : public QueryState {
   /// anything else (becomes status `error`).
   virtual void build(const Mesh& mesh, const BuildContext& ctx) = 0;
 
-  /// Whether this instance (with its parameters) answers q. Defaults to the registered caps.
-  virtual bool supports(QueryType q) const = 0;
-
-  /// Whether this instance answers the whole query set per call (a Python method's
-  /// `batch=true`). The harness then calls inside_batch()/distance_batch() instead of
-  /// inside()/distance(), times whole-set calls, and records no per-query latency: one call
-  /// answers every query, so no query has a latency of its own.
-  virtual bool answers_in_batches() const { return false; }
-  /// Every point of `points`, in order: `inside` gets points.size() bytes (1 inside, 0 outside).
-  /// Default: unsupported.
-  virtual void inside_batch(const std::vector<Vec3d>& points, std::vector<std::uint8_t>& inside);
-  /// Every point of `points`, in order: `out` gets points.size() answers. Default: unsupported.
-  virtual void distance_batch(const std::vector<Vec3d>& points, std::vector<DistanceResult>& out);
+  /// Whether this instance, with its options, answers q, where that is narrower than what the
+  /// method registered (MethodInfo::caps, where capabilities are said): a Python method asks its
+  /// module. Default: as registered. Read through answers() (registry.hpp).
+  virtual bool supports(QueryType) const { return true; }
 
   /// A new query state over this method's built structure, for one more thread. Called after
   /// build(), never concurrently with itself; the state may then run on any one thread at the
@@ -124,6 +123,12 @@ class Method : public QueryState {
 
   /// Bytes of the method's own structure, including its copy of the geometry.
   virtual std::size_t structure_bytes() const = 0;
+
+  /// The build options the structure itself carries, by option name, as text its declaration
+  /// reads: for a structure read from a file (a prebuilt store), the options it was built with.
+  /// A result records these in place of the spec's, so that it states what ran. Read after
+  /// build(). Default: none (the structure was built from the spec's options).
+  virtual std::map<std::string, std::string> build_options_read() const { return {}; }
 
   /// Facts about the built structure worth recording (levels, node counts, ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }

@@ -1,7 +1,9 @@
 #include "harness/core/params.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -19,6 +21,24 @@ const char* to_string(ParamType t) {
     case ParamType::choice: return "choice";
   }
   return "?";
+}
+
+const char* to_string(ParamRole r) { return r == ParamRole::build ? "build" : "query"; }
+
+std::string ParamValue::canonical() const {
+  switch (type) {
+    case ParamType::integer: return std::to_string(integer);
+    case ParamType::real: {
+      // The shortest text that reads back to the same double: one configuration, one key.
+      std::array<char, 32> buf{};
+      auto res = std::to_chars(buf.data(), buf.data() + buf.size(), real);
+      return std::string(buf.data(), res.ptr);
+    }
+    case ParamType::boolean: return boolean ? "true" : "false";
+    case ParamType::text:
+    case ParamType::choice: return text;
+  }
+  return text;
 }
 
 bool parse_bool(const std::string& s, bool* out) {
@@ -51,48 +71,53 @@ bool parse_real(const std::string& s, double* out) {
   return true;
 }
 
-// Checks one value against its spec; returns the normalised value or throws.
-std::string normalise(const std::string& method, const ParamSpec& p, const std::string& v) {
+// Checks one value against its spec; returns it typed or throws.
+ParamValue typed_value(const std::string& method, const ParamSpec& p, const std::string& v) {
   auto bad = [&](const std::string& why) {
     return InputError("method " + method + ": parameter " + p.name + "=" + v + ": " + why);
   };
+  ParamValue out;
+  out.type = p.type;
+  auto range = [&](double x) {
+    if (x < p.min || x > p.max) {
+      std::ostringstream os;
+      os << "out of range [" << p.min << ", " << p.max << "]";
+      throw bad(os.str());
+    }
+  };
+  // A number may be declared with choices too (e.g. 1, 3 or 5 rays): its canonical text must be one.
+  auto one_of = [&](const ParamValue& x) {
+    if (!p.choices.empty() && std::find(p.choices.begin(), p.choices.end(), x.canonical()) == p.choices.end()) {
+      std::string all;
+      for (auto& c : p.choices) all += (all.empty() ? "" : ", ") + c;
+      throw bad("not one of: " + all);
+    }
+  };
   switch (p.type) {
-    case ParamType::integer: {
-      std::int64_t i;
-      if (!parse_int(v, &i)) throw bad("not an integer");
-      if (i < p.min || i > p.max) {
-        std::ostringstream os;
-        os << "out of range [" << p.min << ", " << p.max << "]";
-        throw bad(os.str());
-      }
-      return std::to_string(i);
-    }
-    case ParamType::real: {
-      double d;
-      if (!parse_real(v, &d)) throw bad("not a finite number");
-      if (d < p.min || d > p.max) {
-        std::ostringstream os;
-        os << "out of range [" << p.min << ", " << p.max << "]";
-        throw bad(os.str());
-      }
-      return v;
-    }
-    case ParamType::boolean: {
-      bool b;
-      if (!parse_bool(v, &b)) throw bad("not a boolean (true/false, 1/0, yes/no, on/off)");
-      return b ? "true" : "false";
-    }
-    case ParamType::choice: {
+    case ParamType::integer:
+      if (!parse_int(v, &out.integer)) throw bad("not an integer");
+      range(double(out.integer));
+      one_of(out);
+      return out;
+    case ParamType::real:
+      if (!parse_real(v, &out.real)) throw bad("not a finite number");
+      range(out.real);
+      one_of(out);
+      return out;
+    case ParamType::boolean:
+      if (!parse_bool(v, &out.boolean)) throw bad("not a boolean (true/false, 1/0, yes/no, on/off)");
+      return out;
+    case ParamType::choice:
       if (std::find(p.choices.begin(), p.choices.end(), v) == p.choices.end()) {
         std::string all;
         for (auto& c : p.choices) all += (all.empty() ? "" : ", ") + c;
         throw bad("not one of: " + all);
       }
-      return v;
-    }
-    case ParamType::text: return v;
+      out.text = v;
+      return out;
+    case ParamType::text: out.text = v; return out;
   }
-  return v;
+  return out;
 }
 
 }  // namespace
@@ -111,12 +136,10 @@ Params Params::resolve(const std::string& method, const std::vector<ParamSpec>& 
     }
   }
   for (auto& s : specs) {
-    out.defaults_[s.name] = s.default_value.empty() && s.type != ParamType::text
-                                ? s.default_value
-                                : normalise(method, s, s.default_value);
+    out.defaults_[s.name] = typed_value(method, s, s.default_value);
     auto it = given.find(s.name);
     if (it != given.end()) {
-      out.values_[s.name] = normalise(method, s, it->second);
+      out.values_[s.name] = typed_value(method, s, it->second);
       out.given_[s.name] = it->second;
     } else {
       out.values_[s.name] = out.defaults_[s.name];
@@ -125,28 +148,52 @@ Params Params::resolve(const std::string& method, const std::vector<ParamSpec>& 
   return out;
 }
 
-const std::string& Params::get(const std::string& key) const {
+Params Params::with_values(const std::string& method, const std::vector<ParamSpec>& specs,
+                           const std::map<std::string, std::string>& read) const {
+  Params out = *this;
+  for (const auto& [k, text] : read) {
+    auto it = std::find_if(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.name == k; });
+    if (it == specs.end()) throw std::logic_error("method " + method + " read an undeclared option " + k);
+    out.values_[k] = typed_value(method, *it, text);
+  }
+  return out;
+}
+
+const ParamValue& Params::value(const std::string& key) const {
   auto it = values_.find(key);
   if (it == values_.end()) throw std::logic_error("parameter not declared: " + key);
   return it->second;
 }
 
-std::int64_t Params::get_int(const std::string& key) const {
-  std::int64_t v = 0;
-  if (!parse_int(get(key), &v)) throw InputError("parameter " + key + " is not an integer");
+namespace {
+const ParamValue& typed(const ParamValue& v, ParamType want, const std::string& key) {
+  if (v.type != want) throw std::logic_error("parameter " + key + " is declared " + to_string(v.type) +
+                                             ", read as " + to_string(want));
   return v;
+}
+}  // namespace
+
+const std::string& Params::get(const std::string& key) const {
+  const ParamValue& v = value(key);
+  if (v.type != ParamType::text && v.type != ParamType::choice)
+    throw std::logic_error("parameter " + key + " is declared " + to_string(v.type) + ", read as text");
+  return v.text;
 }
 
-double Params::get_real(const std::string& key) const {
-  double v = 0;
-  if (!parse_real(get(key), &v)) throw InputError("parameter " + key + " is not a number");
-  return v;
+std::int64_t Params::get_int(const std::string& key) const {
+  return typed(value(key), ParamType::integer, key).integer;
 }
+
+double Params::get_real(const std::string& key) const { return typed(value(key), ParamType::real, key).real; }
 
 bool Params::get_bool(const std::string& key) const {
-  bool b = false;
-  if (!parse_bool(get(key), &b)) throw InputError("parameter " + key + " is not a boolean");
-  return b;
+  return typed(value(key), ParamType::boolean, key).boolean;
+}
+
+std::map<std::string, std::string> Params::values() const {
+  std::map<std::string, std::string> out;
+  for (const auto& [k, v] : values_) out[k] = v.canonical();
+  return out;
 }
 
 std::string Params::non_default_string() const {
@@ -154,7 +201,7 @@ std::string Params::non_default_string() const {
   for (auto& [k, v] : values_) {
     auto d = defaults_.find(k);
     if (d != defaults_.end() && d->second == v) continue;
-    s += (s.empty() ? "" : ",") + k + "=" + v;
+    s += (s.empty() ? "" : ",") + k + "=" + v.canonical();
   }
   return s;
 }

@@ -1,6 +1,9 @@
 #pragma once
-/// Method parameters: declared by each method (name, type, default, help), chosen on the
-/// command line as `NAME:key=value,key=value` (method_spec.hpp), validated before anything is built.
+/// Method options: declared once by each method (name, type, role, default, help, range or
+/// choices), chosen on the command line as `NAME:key=value,key=value` (method_spec.hpp), checked
+/// and turned into typed values before anything is built. Everything else reads that one
+/// declaration: the canonical key results group by (printed from the typed values, so 5 and 5.0
+/// are one key), `bvhbench methods`, the values a method's constructor gets, a suite's sweeps.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -10,9 +13,14 @@ namespace bvhbench {
 
 enum class ParamType { integer, real, boolean, text, choice };
 
+/// Whether an option shapes the structure (another value means another build) or only how the
+/// queries are asked of it. A structure read from a file (a store) carries its own build options.
+enum class ParamRole { build, query };
+
 struct ParamSpec {
   std::string name;
   ParamType type = ParamType::text;
+  ParamRole role = ParamRole::build;
   std::string default_value;         ///< as the user would type it
   std::string help;
   std::vector<std::string> choices;  ///< for ParamType::choice
@@ -20,8 +28,22 @@ struct ParamSpec {
 };
 
 const char* to_string(ParamType t);
+const char* to_string(ParamRole r);
 
-/// A full, validated parameter set: every declared parameter has a value (given or default).
+/// One option's value, typed as its declaration says.
+struct ParamValue {
+  ParamType type = ParamType::text;
+  std::int64_t integer = 0;
+  double real = 0;
+  bool boolean = false;
+  std::string text;  ///< text or choice
+  /// The canonical text: integers in decimal, reals in the shortest form that reads back to the
+  /// same double (5.0 -> "5", 0.50 -> "0.5"), booleans "true"/"false", text and choices as given.
+  std::string canonical() const;
+  bool operator==(const ParamValue& o) const { return canonical() == o.canonical(); }
+};
+
+/// A full, validated option set: every declared option has a typed value (given or default).
 class Params {
  public:
   Params() = default;
@@ -30,20 +52,33 @@ class Params {
   static Params resolve(const std::string& method, const std::vector<ParamSpec>& specs,
                         const std::map<std::string, std::string>& given);
 
+  /// These options with `read` (option -> text, e.g. a store's own build options) put in place
+  /// of the values they name, checked against the same declaration. The defaults stay, so
+  /// non_default_string() still tells what differs from them.
+  Params with_values(const std::string& method, const std::vector<ParamSpec>& specs,
+                     const std::map<std::string, std::string>& read) const;
+
+  /// Typed reads; a key not declared, or declared with another type, is a programming error
+  /// (std::logic_error), never a user's.
   std::int64_t get_int(const std::string& key) const;
   double get_real(const std::string& key) const;
   bool get_bool(const std::string& key) const;
-  const std::string& get(const std::string& key) const;  ///< text or choice (normalised)
+  const std::string& get(const std::string& key) const;  ///< text or choice
+  const ParamValue& value(const std::string& key) const;
   bool has(const std::string& key) const { return values_.count(key) != 0; }
-  /// Values that differ from the defaults, "k=v,k=v" sorted by key ("" when all default).
+  /// Whether the user gave `key` (even at its default value).
+  bool given(const std::string& key) const { return given_.count(key) != 0; }
+  /// Values that differ from the defaults, "k=v,k=v" sorted by key, canonical ("" when all default).
   std::string non_default_string() const;
-  const std::map<std::string, std::string>& values() const { return values_; }
+  /// Every option's canonical text, by key (what results record as job.params).
+  std::map<std::string, std::string> values() const;
+  /// The options the user gave, as typed (not canonical).
   const std::map<std::string, std::string>& given() const { return given_; }
 
  private:
-  std::map<std::string, std::string> values_;  // normalised ("true"/"false", numbers as typed)
+  std::map<std::string, ParamValue> values_;
   std::map<std::string, std::string> given_;
-  std::map<std::string, std::string> defaults_;
+  std::map<std::string, ParamValue> defaults_;
 };
 
 bool parse_bool(const std::string& s, bool* out);  ///< 1/0, true/false, yes/no, on/off

@@ -1,5 +1,6 @@
 #include "harness/core/registry.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "harness/util/errors.hpp"
@@ -18,15 +19,28 @@ bool QueryState::inside(const Vec3d&) { throw UnsupportedError("inside queries a
 DistanceResult QueryState::distance(const Vec3d&) {
   throw UnsupportedError("distance queries are not supported");
 }
-void Method::inside_batch(const std::vector<Vec3d>&, std::vector<std::uint8_t>&) {
-  throw UnsupportedError("inside queries in batches are not supported");
+
+bool answers(const MethodInfo& info, const Method& method, QueryType q) {
+  return (q == QueryType::inside ? info.caps.inside : info.caps.distance) && method.supports(q);
 }
-void Method::distance_batch(const std::vector<Vec3d>&, std::vector<DistanceResult>&) {
-  throw UnsupportedError("distance queries in batches are not supported");
+
+std::string sweep_problem(const MethodInfo& m) {
+  for (const std::string& entry : m.sweep) {
+    try {
+      const MethodSpec spec = parse_method_spec(entry.empty() ? m.name : m.name + ":" + entry);
+      const Params p = Params::resolve(m.name, m.params, spec.given);
+      if (m.check) m.check(p);
+    } catch (const InputError& e) {
+      return "'" + entry + "': " + e.what();
+    }
+  }
+  return "";
 }
 
 void Registry::add(MethodInfo info) {
   if (find(info.name)) throw std::logic_error("method registered twice: " + info.name);
+  if (const std::string bad = sweep_problem(info); !bad.empty())
+    throw std::logic_error("method " + info.name + ": sweep entry " + bad);
   methods_.push_back(std::move(info));
 }
 
@@ -72,6 +86,7 @@ MethodSpec Registry::describe(const std::string& text) const {
   }
   try {
     spec.params = Params::resolve(spec.name, m->params, spec.given);
+    if (m->check) m->check(spec.params);
   } catch (const InputError& e) {
     spec.problem = e.what();
     return spec;
@@ -92,6 +107,15 @@ std::unique_ptr<Method> Registry::create(const MethodSpec& spec) const {
 }
 
 std::unique_ptr<Method> Registry::create(const std::string& text) const { return create(resolve(text)); }
+
+std::vector<std::string> Registry::all_method_specs(const std::vector<std::string>& except) const {
+  std::vector<std::string> out;
+  for (const MethodInfo& m : methods_) {
+    if (m.testing_only || std::find(except.begin(), except.end(), m.name) != except.end()) continue;
+    for (const std::string& entry : m.sweep) out.push_back(entry.empty() ? m.name : m.name + ":" + entry);
+  }
+  return out;
+}
 
 const Registry& Registry::global() {
   static const Registry r = [] {

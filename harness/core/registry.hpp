@@ -32,7 +32,24 @@ struct MethodInfo {
   /// a counter wrongly left portable fails the gate on the first other machine, loudly and by
   /// name; one wrongly named here would silently stop gating on every other machine.
   std::vector<std::string> machine_dependent_counters;
+  /// The method's default sweep: the variants a suite's `methods: all` runs, each the text after
+  /// `NAME:` in a method spec ("k=v,k=v"; "" = every option at its default). Declared beside the
+  /// options, as each algorithm's sweep lives beside it in ann-benchmarks; empty: the method
+  /// takes no part in `methods: all` (it needs an input a suite cannot supply, such as a store).
+  /// Every entry must resolve against `params` (Registry::add checks).
+  std::vector<std::string> sweep = {""};
+  /// Checks that the options make sense together, beyond each one alone (e.g. build options
+  /// given beside a prebuilt store); throws InputError naming them. Optional.
+  std::function<void(const Params&)> check;
 };
+
+/// Whether `method`, an instance of `info`, answers `q`: the registered capability, narrowed by
+/// the instance (Method::supports).
+bool answers(const MethodInfo& info, const Method& method, QueryType q);
+
+/// Why `m.sweep` does not resolve against `m.params` (the first bad entry and the reason), ""
+/// when every entry does.
+std::string sweep_problem(const MethodInfo& m);
 
 /// Extra `bvhbench` subcommands a method brings (e.g. `bvhbench ebp stats`). `setup` adds the
 /// subcommand to the CLI app, with its options and callback.
@@ -43,7 +60,8 @@ struct CommandInfo {
 
 class Registry {
  public:
-  void add(MethodInfo info);          ///< throws std::logic_error on a duplicate name
+  /// Throws std::logic_error on a duplicate name or a sweep entry that does not resolve.
+  void add(MethodInfo info);
   void add_command(CommandInfo cmd);
   /// Notes a method this build knows of but cannot offer here (a Python method whose package is
   /// not installed), with why: `bvhbench methods` shows the note, and naming the method gets it
@@ -75,6 +93,10 @@ class Registry {
   std::unique_ptr<Method> create(const MethodSpec& spec) const;
   /// create(resolve(text)): for tests and tools that name a method in code.
   std::unique_ptr<Method> create(const std::string& text) const;
+
+  /// The method specs of a suite's `methods: all`: every method that is not testing-only, not in
+  /// `except`, with each entry of its sweep ("NAME" or "NAME:ENTRY"), in registration order.
+  std::vector<std::string> all_method_specs(const std::vector<std::string>& except = {}) const;
 
   /// The registry with every method compiled into this build.
   static const Registry& global();

@@ -1,5 +1,6 @@
 #include "harness/run/result_schema.hpp"
 
+#include <algorithm>
 #include <functional>
 #include <stdexcept>
 
@@ -82,7 +83,7 @@ ResultSchema ResultSchema::parse(std::string_view text) {
     s.version_ = doc.at("schema").get<std::string>();
     for (auto& [path, f] : doc.at("fields").items())
       s.fields_.push_back({path, f.at("type").get<std::string>(), f.at("required").get<std::string>(),
-                           f.value("doc", std::string())});
+                           f.value("doc", std::string()), f.value("enum", std::vector<std::string>())});
     for (const json& c : doc.at("summary_csv")) {
       SummaryColumn col;
       col.column = c.at("column").get<std::string>();
@@ -101,6 +102,12 @@ ResultSchema ResultSchema::parse(std::string_view text) {
 const ResultSchema& ResultSchema::get() {
   static const ResultSchema s = parse(kResultSchemaText);
   return s;
+}
+
+const std::vector<std::string>& ResultSchema::statuses() const {
+  for (const ResultField& f : fields_)
+    if (f.path == "status") return f.values;
+  throw std::logic_error("result schema without a status field");
 }
 
 const ResultField* ResultSchema::describe(const std::vector<std::string>& path) const {
@@ -158,6 +165,12 @@ void ResultSchema::validate(const json& r, const std::string& file) const {
       continue;
     }
     if (!has_type(*it, f.type)) throw file_error(file, f.path + " must be " + a_type(f.type));
+    if (!f.values.empty() && it->is_string() &&
+        std::find(f.values.begin(), f.values.end(), it->get<std::string>()) == f.values.end()) {
+      std::string all;
+      for (const std::string& v : f.values) all += (all.empty() ? "" : ", ") + v;
+      throw file_error(file, f.path + " '" + it->get<std::string>() + "' is none of: " + all);
+    }
   }
 }
 

@@ -17,6 +17,7 @@ struct ResultField {
   std::string type;      ///< string, integer, number, boolean, object, array<T>, any; "|null" allows null
   std::string required;  ///< always, ok (when status is ok), optional
   std::string doc;       ///< one line
+  std::vector<std::string> values;  ///< a string's only values ("enum"); empty: any
 };
 
 /// One column of summary.csv: a field's value, the ratio of two fields, or the share a / (a + b).
@@ -41,6 +42,8 @@ class ResultSchema {
   const std::string& version() const { return version_; }  ///< "bvhbench.result/1"
   const std::vector<ResultField>& fields() const { return fields_; }
   const std::vector<SummaryColumn>& summary_columns() const { return columns_; }
+  /// The job statuses, in the schema's order (its `status` enum): the one list of them.
+  const std::vector<std::string>& statuses() const;
 
   /// The field describing `path` (keys in order), or null: an exact entry first, else one with
   /// "*" in place of keys, else a free-form "any" ancestor.

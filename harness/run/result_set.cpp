@@ -1,9 +1,14 @@
 #include "harness/run/result_set.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <fstream>
 
+#include "harness/core/params.hpp"
 #include "harness/run/result_schema.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/json_input.hpp"
@@ -23,11 +28,49 @@ json read_result_file(const std::string& file) {
   return parse_result(text, file);
 }
 
+/// Results written before option values were printed from their typed values kept a real as it
+/// was typed ("1.0", "2.50"); they read as they are written now ("1", "2.5"), so that old and new
+/// results of one configuration pair (compare's key holds job.params). Integers, booleans and
+/// texts were already written canonical; a text that reads whole as a number with a point or an
+/// exponent is taken for a real.
+///
+/// A `threads` option of cgal_aabb ("recorded only"), embree (its device's threads) and openvdb
+/// (a cap on the job's) was removed: a build runs on the job's build threads (build.threads). At
+/// its default it said nothing a result does not, so it is dropped from older results.
+void migrate_params(json& r) {
+  auto job = r.find("job");
+  if (job == r.end() || !job->is_object()) return;
+  auto params = job->find("params");
+  if (params == job->end() || !params->is_object()) return;
+  static const std::map<std::string, std::string> removed_threads = {
+      {"cgal_aabb", "1"}, {"embree", "1"}, {"openvdb", "0"}};
+  const auto method = job->find("method");
+  if (method != job->end() && method->is_string()) {
+    const auto it = removed_threads.find(method->get<std::string>());
+    const auto threads = params->find("threads");
+    if (it != removed_threads.end() && threads != params->end() && *threads == it->second) params->erase(threads);
+  }
+  for (auto& [k, v] : params->items()) {
+    if (!v.is_string()) continue;
+    const std::string s = v.get<std::string>();
+    if (s.find_first_of(".eE") == std::string::npos) continue;
+    char* end = nullptr;
+    errno = 0;
+    const double d = std::strtod(s.c_str(), &end);
+    if (s.empty() || errno != 0 || *end != '\0' || !std::isfinite(d)) continue;
+    ParamValue x;
+    x.type = ParamType::real;
+    x.real = d;
+    v = x.canonical();
+  }
+}
+
 }  // namespace
 
 json parse_result(const std::string& text, const std::string& file) {
   json r = parse_json_input(text, file);
   ResultSchema::get().validate(r, file);
+  migrate_params(r);
   return r;
 }
 

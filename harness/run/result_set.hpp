@@ -19,7 +19,8 @@ struct ResultSet {
 /// an unreadable file, malformed JSON, or a file that is not a bvhbench result.
 ResultSet load_result_set(const std::string& path);
 /// Parses and validates the text of one result file (`file` names it in messages), as
-/// load_result_set does for each. Throws InputError: malformed JSON, not a bvhbench result.
+/// load_result_set does for each (option values of older results read canonical: "1.0" as "1").
+/// Throws InputError: malformed JSON, not a bvhbench result.
 nlohmann::json parse_result(const std::string& text, const std::string& file);
 
 }  // namespace bvhbench

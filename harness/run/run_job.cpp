@@ -21,8 +21,9 @@
 #include "harness/io/query_set_io.hpp"
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
-#include "harness/run/counted_region.hpp"
+#include "harness/run/dataset_manifest.hpp"
 #include "harness/run/machine_fingerprint.hpp"
+#include "harness/run/query_protocol.hpp"
 #include "harness/run/system_info.hpp"
 #include "harness/run/test_slowdown.hpp"
 #include "harness/run/thread_replay.hpp"
@@ -93,7 +94,7 @@ json make_result(const JobSpec& spec, const std::string& status_code, const std:
 
 namespace {
 
-double percentile(std::vector<double>& sorted, double q) {
+double percentile(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return 0;
   double pos = q * (sorted.size() - 1);
   std::size_t i = std::size_t(pos);
@@ -107,38 +108,53 @@ double median(std::vector<double> v) {
   return percentile(v, 0.5);
 }
 
-/// Reused output buffers of a batch method's calls, so that a timed pass allocates nothing.
-struct BatchBuffers {
-  std::vector<std::uint8_t> inside;
-  std::vector<DistanceResult> distance;
-};
-
-/// One call answering every point, checked for the count of answers it gave.
-void batch_call(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& out) {
-  if (qt == QueryType::inside) {
-    out.inside.assign(pts.size(), 0);
-    m.inside_batch(pts, out.inside);
-    if (out.inside.size() != pts.size())
-      throw std::runtime_error("inside_batch gave " + std::to_string(out.inside.size()) +
-                               " answers for " + std::to_string(pts.size()) + " points");
-  } else {
-    out.distance.assign(pts.size(), DistanceResult{});
-    m.distance_batch(pts, out.distance);
-    if (out.distance.size() != pts.size())
-      throw std::runtime_error("distance_batch gave " + std::to_string(out.distance.size()) +
-                               " answers for " + std::to_string(pts.size()) + " points");
-  }
+json spread(const std::vector<double>& v) {
+  return {{"median", median(v)},
+          {"min", *std::min_element(v.begin(), v.end())},
+          {"max", *std::max_element(v.begin(), v.end())},
+          {"samples", v}};
 }
 
-/// One timed pass of a batch method (one call answering every point, path reset first, untimed):
-/// its wall time in seconds. The answers land in `batch`, so the call cannot be optimised away.
-double timed_batch_pass(Method& m, QueryType qt, const std::vector<Vec3d>& pts, BatchBuffers& batch) {
-  m.reset_path();
-  const CountedRegion counted;  // the instruction gate counts this pass (counted_region.hpp)
-  auto t0 = Clock::now();
-  batch_call(m, qt, pts, batch);
-  auto t1 = Clock::now();
-  return std::chrono::duration<double>(t1 - t0).count();
+/// The result's `queries` block (docs/results.md) from what the protocol measured.
+json queries_block(const QueryMeasurement& m, double deadline_ns, int threads, bool probes) {
+  const std::vector<double>& lat = m.latency_ns;  // sorted
+  json q;
+  q["n"] = m.total;
+  if (!m.qps.empty()) {
+    q["throughput_qps"] = spread(m.qps);
+  } else {
+    q["throughput_qps"] = {{"median", nullptr}, {"min", nullptr}, {"max", nullptr}, {"samples", json::array()}};
+  }
+  q["pass_seconds"] = m.pass_seconds;
+  if (m.batch) {
+    // One call answered every query: no query has a latency of its own (query_protocol.hpp).
+    q["latency_ns"] = {{"p50", nullptr}, {"p99", nullptr}, {"p999", nullptr}, {"max", nullptr}, {"mean", nullptr}};
+  } else {
+    const double mean = m.total ? std::accumulate(lat.begin(), lat.end(), 0.0) / double(m.total) : 0.0;
+    q["latency_ns"] = {{"p50", percentile(lat, 0.5)},
+                       {"p99", percentile(lat, 0.99)},
+                       {"p999", percentile(lat, 0.999)},
+                       {"max", lat.empty() ? 0.0 : lat.back()},
+                       {"mean", mean}};
+  }
+  q["deadline_ns"] = deadline_ns;
+  const std::size_t over = std::count_if(lat.begin(), lat.end(), [&](double v) { return v > deadline_ns; });
+  q["over_deadline"] = m.batch ? json(nullptr) : json(over);
+  q["batch"] = m.batch;
+  json th;
+  th["count"] = threads;
+  th["mode"] = probes ? "probes" : "split";
+  const bool with_single = threads > 1;
+  if (with_single && !m.single_qps.empty()) {
+    const double single_median = median(m.single_qps);
+    th["single_thread_qps"] = spread(m.single_qps);
+    th["speedup"] = single_median > 0 && !m.qps.empty() ? json(median(m.qps) / single_median) : json(nullptr);
+  } else {
+    th["single_thread_qps"] = nullptr;
+    th["speedup"] = with_single ? json(nullptr) : json(1.0);
+  }
+  q["threads"] = th;
+  return q;
 }
 
 }  // namespace
@@ -168,7 +184,7 @@ json run_job(const JobSpec& spec) {
                            {"seed", qs.meta.value("seed", json(nullptr))},
                            {"mesh_sha256", qs.meta.value("mesh_sha256", json(nullptr))}};
 
-    if (!method->supports(spec.query_type)) {
+    if (!answers(*info, *method, spec.query_type)) {
       fail(status::unsupported, info->name + " does not answer " + to_string(spec.query_type) +
                                     " queries" +
                                     (params.non_default_string().empty()
@@ -194,6 +210,8 @@ json run_job(const JobSpec& spec) {
                         {"triangles", mesh.num_triangles()},
                         {"vertices", mesh.vertices.size()},
                         {"diagonal", diagonal}};
+    // How the mesh was made, where its dataset's manifest says (a stress case, a real model, ...).
+    if (json d = dataset_entry(mesh.path, mesh.sha256); !d.is_null()) r["job"]["mesh"]["dataset"] = d;
     if (qs.meta.contains("mesh_sha256") && qs.meta["mesh_sha256"] != mesh.sha256)
       r["job"]["queries"]["mesh_mismatch"] = true;
 
@@ -214,8 +232,6 @@ json run_job(const JobSpec& spec) {
     for (const auto& path : probe_points)  // every probe's path: methods size bands and caches from it
       for (const Vec3d& p : path) ctx.query_bounds.add(p);
     ctx.query_kind = qs.kind();
-    ctx.tmp_dir = spec.tmp_dir;
-    ctx.memory_budget_bytes = spec.memory_budget_bytes;
     const std::size_t mesh_bytes = mesh.bytes();
     reset_peak_rss();
     auto b0 = Clock::now();
@@ -225,126 +241,52 @@ json run_job(const JobSpec& spec) {
     const std::size_t structure_bytes = method->structure_bytes();
     r["build"] = {{"seconds", std::chrono::duration<double>(b1 - b0).count()},
                   {"structure_bytes", structure_bytes},
-                  {"peak_rss_bytes", build_peak}};
+                  {"peak_rss_bytes", build_peak},
+                  {"threads", info->caps.build_threads == BuildThreads::job   ? json(spec.threads)
+                              : info->caps.build_threads == BuildThreads::one ? json(1)
+                                                                              : json(nullptr)}};
     r["structure"] = method->info();
+    // A structure read from a file (a store) was built with options of its own: those ran, and
+    // those are recorded (the spec's params_key, which names the file, stays the job's key).
+    if (const auto read = method->build_options_read(); !read.empty()) {
+      r["job"]["params"] = params.with_values(info->name, info->params, read).values();
+      json keys = json::array();
+      for (const auto& kv : read) keys.push_back(kv.first);
+      r["job"]["params_read_from_structure"] = keys;
+    }
 
     // The method keeps what it needs: release the mesh so query memory is the method's own.
     { Mesh released = std::move(mesh); }
     malloc_trim(0);
     reset_peak_rss();
 
-    // ---- counted warm-up pass: answers and work counters ----------------------------------------
+    // ---- the protocol: counted warm-up pass, timed passes, latency pass (query_protocol.hpp) ----
     const auto& pts = qs.points;
     const std::size_t n = pts.size();
-    ThreadedReplay replay(*method, spec.query_type,
-                          probes ? probe_streams(probe_points) : split_streams(pts, spec.threads));
-    const std::size_t total = replay.total();  // queries per pass, over all threads
+    // With T > 1 each timed pass is followed by a pass on one thread (the same set, or probe 0's
+    // path), so the speed-up compares passes taken together.
+    QueryProtocol protocol(*method, spec.query_type,
+                           pts, probes ? probe_streams(probe_points) : split_streams(pts, spec.threads),
+                           ThreadStream{pts.data(), n, 0});
     Answers answers;
-    // A batch method (a Python method's batch=true) answers the whole set in one call; it declares
-    // no concurrent queries, so it runs on one thread (threads > 1 was refused above).
-    const bool batch = method->answers_in_batches();
-    BatchBuffers batch_buffers;
-    if (batch) {
-      answers.resize(spec.query_type, n);
-      method->reset_counters();
-      method->reset_path();
-      batch_call(*method, spec.query_type, pts, batch_buffers);
-      if (spec.query_type == QueryType::inside) {
-        answers.inside = batch_buffers.inside;
-      } else {
-        for (std::size_t i = 0; i < n; ++i) {
-          const DistanceResult& d = batch_buffers.distance[i];
-          answers.distance[i] = d.distance;
-          answers.closest[i] = d.closest;
-          answers.normal[i] = d.normal;
-          answers.triangle[i] = d.triangle;
-        }
-      }
-    } else {
-      replay.counted_pass(&answers);
-    }
+    protocol.counted_pass(&answers);
+    const QueryMeasurement& m = protocol.measured();
     json counters = json::object();
-    for (const Counter& c : replay.counters())
-      counters[c.name] = total ? double(c.value) / double(total) : 0.0;
+    for (const Counter& c : m.counters) counters[c.name] = m.total ? double(c.value) / double(m.total) : 0.0;
     r["counters"] = counters;
     // The oracle and the answers file are for the query set: the other probes' paths have none.
     answers.keep_first(n);
     // Which of them only compare exactly on a like machine, and the machine they were counted on.
     r["machine_dependent"] = {{"counters", info->machine_dependent_counters},
                               {"fingerprint", machine_fingerprint(method->machine_facts())}};
-    std::size_t query_rss = current_rss_bytes();
 
     r["calibration"] = measure_calibration();
-    // ---- throughput: `repeat` passes on T threads; with T > 1 each followed by a pass on one
-    // thread (the same set, or probe 0's path), so the speed-up compares passes taken together --
-    const bool with_single = spec.threads > 1;
-    const ThreadStream single_stream{pts.data(), n, 0};
-    std::vector<double> qps, pass_seconds, single_qps;
     Progress qprog("querying " + info->name + (spec.threads > 1 ? " on " + std::to_string(spec.threads) + " threads" : ""),
-                   spec.repeat * (with_single ? 2 : 1) + 1, spec.progress);
-    for (int rep = 0; rep < spec.repeat; ++rep) {
-      double s = batch ? timed_batch_pass(*method, spec.query_type, pts, batch_buffers) : replay.timed_pass();
-      pass_seconds.push_back(s);
-      qps.push_back(s > 0 ? double(total) / s : 0.0);
-      query_rss = std::max(query_rss, current_rss_bytes());
-      if (with_single) {
-        const double s1 = replay.single_thread_pass(single_stream);
-        single_qps.push_back(s1 > 0 ? double(n) / s1 : 0.0);
-        qprog.update(2 * rep + 2);
-      } else {
-        qprog.update(rep + 1);
-      }
-    }
-
-    // ---- latency: one pass with per-query timestamps, on every thread ---------------------------
-    // A batch method answers every query in one call: no query has a latency of its own, so none
-    // is recorded (the fields are null) rather than the pass time spread evenly over the queries.
-    std::vector<double> lat;
-    if (!batch) replay.latency_pass(&lat);
+                   spec.repeat * (spec.threads > 1 ? 2 : 1) + 1, spec.progress);
+    protocol.timed_passes(spec.repeat, qprog);
     qprog.finish();
-    query_rss = std::max(query_rss, current_rss_bytes());
-    std::size_t over = std::count_if(lat.begin(), lat.end(), [&](double v) { return v > spec.deadline_ns; });
-    double mean = total ? std::accumulate(lat.begin(), lat.end(), 0.0) / double(total) : 0.0;
-    std::sort(lat.begin(), lat.end());
-    json q;
-    q["n"] = total;
-    if (!qps.empty()) {
-      q["throughput_qps"] = {{"median", median(qps)},
-                             {"min", *std::min_element(qps.begin(), qps.end())},
-                             {"max", *std::max_element(qps.begin(), qps.end())},
-                             {"samples", qps}};
-    } else {
-      q["throughput_qps"] = {{"median", nullptr}, {"min", nullptr}, {"max", nullptr}, {"samples", json::array()}};
-    }
-    q["pass_seconds"] = pass_seconds;
-    if (batch) {
-      q["latency_ns"] = {{"p50", nullptr}, {"p99", nullptr}, {"p999", nullptr}, {"max", nullptr}, {"mean", nullptr}};
-    } else {
-      q["latency_ns"] = {{"p50", percentile(lat, 0.5)},
-                         {"p99", percentile(lat, 0.99)},
-                         {"p999", percentile(lat, 0.999)},
-                         {"max", lat.empty() ? 0.0 : lat.back()},
-                         {"mean", mean}};
-    }
-    q["deadline_ns"] = spec.deadline_ns;
-    q["over_deadline"] = batch ? json(nullptr) : json(over);
-    q["batch"] = batch;
-    json th;
-    th["count"] = spec.threads;
-    th["mode"] = probes ? "probes" : "split";
-    if (with_single && !single_qps.empty()) {
-      const double single_median = median(single_qps);
-      th["single_thread_qps"] = {{"median", single_median},
-                                 {"min", *std::min_element(single_qps.begin(), single_qps.end())},
-                                 {"max", *std::max_element(single_qps.begin(), single_qps.end())},
-                                 {"samples", single_qps}};
-      th["speedup"] = single_median > 0 && !qps.empty() ? json(median(qps) / single_median) : json(nullptr);
-    } else {
-      th["single_thread_qps"] = nullptr;
-      th["speedup"] = with_single ? json(nullptr) : json(1.0);
-    }
-    q["threads"] = th;
-    r["queries"] = q;
+    r["queries"] = queries_block(m, spec.deadline_ns, spec.threads, probes);
+    const std::size_t query_rss = m.query_rss;
 
     const std::size_t query_peak = peak_rss_bytes();
     r["memory"] = {{"structure_bytes", structure_bytes},

@@ -1,6 +1,7 @@
 #pragma once
-/// One job: load the mesh, build one method, replay one query set, measure, write the result
-/// JSON of the contract (docs/results.md) and optionally the answers.
+/// One job: load the mesh, build one method, replay one query set (measured by the protocol of
+/// query_protocol.hpp), and assemble the result JSON of the contract (docs/results.md) and
+/// optionally the answers.
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -21,13 +22,12 @@ struct JobSpec {
   int threads = 1;
   std::string truth_path;    ///< optional oracle .npz -> accuracy block
   std::string answers_path;  ///< optional .npz of the per-query answers
-  std::string tmp_dir;
-  std::size_t memory_budget_bytes = 0;
   double deadline_ns = 1e6;  ///< haptic deadline: 1 kHz loop
   bool progress = true;
 };
 
-/// Status codes of the contract.
+/// Status codes of the contract: the `status` enum of result_schema.json, the one list of them
+/// (ResultSchema::statuses(); a test holds these names to it).
 namespace status {
 inline constexpr const char* ok = "ok";
 inline constexpr const char* unsupported = "unsupported";
@@ -36,6 +36,7 @@ inline constexpr const char* crash = "crash";
 inline constexpr const char* timeout = "timeout";
 inline constexpr const char* oom = "oom";
 inline constexpr const char* error = "error";
+inline constexpr const char* all[] = {ok, unsupported, rejected_input, crash, timeout, oom, error};
 }  // namespace status
 
 /// Runs the job in this process. Never throws for a method's or the input's failure: the

@@ -70,8 +70,37 @@ std::string scalar(const std::string& file, const YAML::Node& n, const std::stri
   return n.as<std::string>();
 }
 
+// `all` or {all: true, except: [NAME, ...]}: every registered method with the default sweep its
+// folder declares (MethodInfo::sweep), so that a new method folder reaches such a matrix with no
+// other file changed.
+std::vector<std::string> expand_all(const std::string& file, const YAML::Node& n) {
+  std::vector<std::string> except;
+  if (n.IsMap()) {
+    for (auto kv : n) {
+      const std::string key = kv.first.as<std::string>();
+      if (key != "all" && key != "except") yaml_error(file, n, "unknown key '" + key + "' of {all: true, except: [...]}");
+    }
+    bool all = false;
+    try {
+      all = n["all"].as<bool>();
+    } catch (const YAML::Exception&) {
+      yaml_error(file, n["all"], "all: is true or false");
+    }
+    if (!all) return {};
+    for (auto x : as_list(n["except"])) {
+      const std::string name = scalar(file, x, "a method name in except:");
+      if (!Registry::global().find(name) && !Registry::global().is_left_out(name))
+        yaml_error(file, x, "except: names no method: '" + name + "'");
+      except.push_back(name);
+    }
+  }
+  return Registry::global().all_method_specs(except);
+}
+
 // Expands {name: m, params: {a: [1, 2], b: x}} into "m:a=1,b=x", "m:a=2,b=x".
 std::vector<std::string> expand_method(const std::string& file, const YAML::Node& n) {
+  if (n.IsScalar() && n.as<std::string>() == "all") return expand_all(file, n);
+  if (n.IsMap() && n["all"]) return expand_all(file, n);
   if (n.IsScalar()) return {n.as<std::string>()};
   if (!n.IsMap() || !n["name"]) yaml_error(file, n, "a method is NAME, NAME:k=v or {name:, params:}");
   std::string name = scalar(file, n["name"], "method name");

@@ -1,5 +1,7 @@
 #include "harness/run/suite_runner.hpp"
 
+#include "harness/run/folder_lock.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -59,6 +61,8 @@ SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
   const fs::path out = options.out;
   const fs::path runs = out / "runs", logs = out / "logs";
   const fs::path data = options.data_dir.empty() ? out / "data" : fs::path(options.data_dir);
+  fs::create_directories(out);
+  const FolderLock lock(out.string());  // one writer per results folder, until this returns
   fs::create_directories(runs);
   fs::create_directories(logs);
   const ChildLimits limits{cfg.timeout_s, cfg.memory_limit_mb};

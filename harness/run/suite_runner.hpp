@@ -7,7 +7,8 @@
 /// adopted. An interrupt (interrupt.hpp) keeps what finished and stops.
 ///
 /// Layout of OUT: suite.yml (a copy of the suite file), runs/ID.json, logs/ID.log (a job's
-/// output), logs/queries__*.log and logs/truth__*.log, summary.csv, data/ (the default cache).
+/// output), logs/queries__*.log and logs/truth__*.log, summary.csv, data/ (the default cache), and
+/// suite.lock while a run writes it (folder_lock.hpp).
 #include <cstddef>
 #include <string>
 #include <vector>

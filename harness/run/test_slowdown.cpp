@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "harness/core/batch_answers.hpp"
 #include "harness/util/errors.hpp"
 
 namespace bvhbench {
@@ -20,8 +21,9 @@ inline void extra_work(std::uint64_t units) {
   }
 }
 
-/// The method, with extra_work() before every query; everything else forwarded unchanged.
-class SlowedMethod final : public Method {
+/// The method, with extra_work() before every query; everything else forwarded unchanged (batch
+/// calls too, when the method answers in batches).
+class SlowedMethod final : public Method, public BatchAnswers {
  public:
   SlowedMethod(std::unique_ptr<Method> inner, std::string knob, std::uint64_t units)
       : inner_(std::move(inner)), knob_(std::move(knob)), units_(units) {}
@@ -44,15 +46,16 @@ class SlowedMethod final : public Method {
     inner_->build(mesh, ctx);
   }
   bool supports(QueryType q) const override { return inner_->supports(q); }
-  bool answers_in_batches() const override { return inner_->answers_in_batches(); }
+  bool answers_in_batches() const override { return batch_answers(*inner_) != nullptr; }
   void inside_batch(const std::vector<Vec3d>& points, std::vector<std::uint8_t>& inside) override {
     for (std::size_t i = 0; i < points.size(); ++i) extra_work(units_);
-    inner_->inside_batch(points, inside);
+    batch_answers(*inner_)->inside_batch(points, inside);
   }
   void distance_batch(const std::vector<Vec3d>& points, std::vector<DistanceResult>& out) override {
     for (std::size_t i = 0; i < points.size(); ++i) extra_work(units_);
-    inner_->distance_batch(points, out);
+    batch_answers(*inner_)->distance_batch(points, out);
   }
+  std::map<std::string, std::string> build_options_read() const override { return inner_->build_options_read(); }
   std::unique_ptr<QueryState> new_query_state() const override {
     auto state = inner_->new_query_state();
     if (!state) return nullptr;

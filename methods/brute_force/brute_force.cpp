@@ -84,7 +84,6 @@ class BruteForce final : public SharedStructureMethod<BruteForceQueries> {
     start_queries();
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override {
     return g_.v.capacity() * sizeof(Vec3d) + g_.f.capacity() * sizeof(g_.f[0]);
@@ -103,10 +102,11 @@ void bvhbench_register_brute_force(bvhbench::Registry& r) {
   MethodInfo m;
   m.name = "brute_force";
   m.description = "Exact reference: every triangle per query, double precision; inside by the generalized winding number";
-  m.caps = {true, true, true, false, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true;
   m.caps.concurrent_queries = true;  // per-thread counters over the shared mesh
   m.machine_dependent_counters = {};  // none: our own loop over every triangle, no library
-  m.params = {{"winding_threshold", ParamType::real, "0.5",
+  m.params = {{"winding_threshold", ParamType::real, ParamRole::query, "0.5",
                "inside iff the generalized winding number exceeds this", {}, 0.0, 1.0}};
   m.create = [](const Params& p) { return std::make_unique<BruteForce>(p); };
   r.add(std::move(m));

@@ -25,8 +25,8 @@
 //    point is the segment or point they collapse to), but the ray test skips them: CGAL's
 //    ray-triangle predicate has the precondition "triangle not degenerate" (an assertion in
 //    debug builds), and a zero-area triangle cannot change a ray's parity anyway.
-//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially; `threads` is accepted for
-//    uniform sweeps and recorded, it changes nothing there. Queries run on the job's threads: both
+//  - Threads: CGAL 5.5 builds the AABB tree and its KD-tree sequentially: the registration says so
+//    (no caps.parallel_build), and a result records build.threads 1. Queries run on the job's threads: both
 //    trees are const once built (built here, never lazily by a query), traversals are const, and
 //    each thread's query state keeps its own hint and counters (CgalQueries).
 #include <CGAL/AABB_primitive.h>
@@ -163,7 +163,6 @@ struct Options {
   std::string kernel;
   bool kd_tree = true;
   bool coherent = false;
-  int threads = 1;
 };
 
 /// The built structure, shared read-only by every thread's queries (CGAL's AABB_tree and its
@@ -353,7 +352,6 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
     this->start_queries();
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override {
     return geometry_bytes() + tree_bytes() + s_.kd_bytes;
@@ -367,8 +365,7 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
             {"node_bytes", sizeof(CGAL::AABB_node<Traits>)},
             {"primitive_bytes", sizeof(Primitive)},
             {"kd_tree_built", s_.kd_built},
-            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", s_.kd_bytes}}},
-            {"threads_effective", 1}};
+            {"bytes", {{"geometry", geometry_bytes()}, {"aabb_tree", tree_bytes()}, {"kd_tree", s_.kd_bytes}}}};
   }
 
  private:
@@ -398,7 +395,8 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   m.description =
       "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
       "Side_of_triangle_mesh's ray parity on the same tree";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread hint and counters over the const trees
   // None: CGAL is header-only and compiled here with our flags, with no run-time CPU dispatch;
   // the traversal and its filtered predicates run in plain double (interval filters under our
@@ -406,22 +404,21 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   // gives the same answer on any kernel). The counts depend on the input and the build alone.
   m.machine_dependent_counters = {};
   m.params = {
-      {"kernel", ParamType::choice, "epick",
+      {"kernel", ParamType::choice, ParamRole::build, "epick",
        "geometric kernel: epick (exact predicates) or simple_cartesian (Simple_cartesian<double>)",
        {"epick", "simple_cartesian"}},
-      {"kd_tree", ParamType::boolean, "true",
+      {"kd_tree", ParamType::boolean, ParamRole::build, "true",
        "accelerate_distance_queries: hint each distance query with the KD-tree's nearest vertex", {}},
-      {"coherent", ParamType::boolean, "false",
+      {"coherent", ParamType::boolean, ParamRole::query, "false",
        "hint each distance query with the previous closest point and triangle (haptic paths)", {}},
-      {"threads", ParamType::integer, "1",
-       "recorded only: CGAL 5.5 builds and queries this tree sequentially", {}, 1, 1024},
   };
+  // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
+  m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     Options o;
     o.kernel = p.get("kernel");
     o.kd_tree = p.get_bool("kd_tree");
     o.coherent = p.get_bool("coherent");
-    o.threads = int(p.get_int("threads"));
     if (o.kernel == "simple_cartesian")
       return std::make_unique<CgalAabb<CGAL::Simple_cartesian<double>>>(o);
     return std::make_unique<CgalAabb<CGAL::Exact_predicates_inexact_constructions_kernel>>(o);

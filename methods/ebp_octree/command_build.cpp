@@ -143,12 +143,7 @@ void add_build_command(CLI::App& ebp_cmd) {
   cmd->callback([o] {
     const auto t0 = std::chrono::steady_clock::now();
     SignalGuard signals;
-    const MethodInfo* mi = Registry::global().find("ebp_octree");
-    if (!mi) throw std::logic_error("ebp_octree is not registered");
-    std::map<std::string, std::string> given = parse_param_args(o->params);
-    for (const char* k : {"store", "cache_mb", "cold", "coherent"})
-      if (given.count(k)) throw InputError(std::string("--param ") + k + ": not a build parameter");
-    const Params p = Params::resolve("ebp_octree", mi->params, given);
+    const Params p = resolve_build_args(parse_param_args(o->params));
     const ebp::BuildParams bp = build_params(p, o->threads);
 
     const std::filesystem::path out = std::filesystem::absolute(o->out);

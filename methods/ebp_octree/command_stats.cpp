@@ -27,7 +27,7 @@ void add_stats_command(CLI::App& ebp_cmd) {
   cmd->add_option("--threads", o->threads, "Build threads")->check(CLI::Range(1, 1024));
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] {
-    const Params p = Params::resolve("ebp_octree", ebp_params(), parse_param_args(o->params));
+    const Params p = resolve_build_args(parse_param_args(o->params));
     Progress load("loading " + o->mesh, 1.0, !o->json);
     const Mesh mesh = load_mesh(o->mesh);
     load.finish();

@@ -28,28 +28,39 @@ namespace bvhbench {
 
 std::vector<ParamSpec> ebp_params() {
   return {
-      {"leaf_factor", ParamType::real, "5",
+      {"leaf_factor", ParamType::real, ParamRole::build, "5",
        "leaf cell size >= leaf_factor x average edge length (the paper: 5)", {}, 0.05, 1e6},
-      {"max_planes", ParamType::integer, "8", "bounding planes per node, at most", {}, 0, 64},
-      {"cluster_angle", ParamType::real, "30",
+      {"max_planes", ParamType::integer, ParamRole::build, "8", "bounding planes per node, at most", {}, 0, 64},
+      {"cluster_angle", ParamType::real, ParamRole::build, "30",
        "degrees: face normals closer than this share one bounding plane", {}, 0.5, 90},
-      {"coherent", ParamType::boolean, "false",
+      {"coherent", ParamType::boolean, ParamRole::query, "false",
        "path coherence: seed distance with the previous closest triangle, reuse the previous leaf", {}},
-      {"certificate", ParamType::boolean, "true",
+      {"certificate", ParamType::boolean, ParamRole::query, "true",
        "coherent distance: answer from a certificate (the triangles near the last renewal) while the probe "
        "stays in its ball; same answers", {}},
-      {"certificate_policy", ParamType::choice, "auto",
+      {"certificate_policy", ParamType::choice, ParamRole::query, "auto",
        "coherent distance with certificate: auto = certificates where their work per query (from the counters) "
        "is below a plain search's, plain streaks elsewhere; always = a certificate at every renewal; same answers",
        {"auto", "always"}},
-      {"chained_sign", ParamType::boolean, "true",
+      {"chained_sign", ParamType::boolean, ParamRole::query, "true",
        "coherent distance on closed meshes: the previous query's sign when the probe stays within its "
        "distance of it (no inside test); same answers", {}},
       // out of core (ooc_method.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
-      {"store", ParamType::text, "", "out of core: answer from this .ebp store through a page cache", {}},
-      {"cache_mb", ParamType::integer, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
-      {"cold", ParamType::boolean, "false", "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
+      {"store", ParamType::text, ParamRole::build, "", "out of core: answer from this .ebp store through a page cache", {}},
+      {"cache_mb", ParamType::integer, ParamRole::query, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
+      {"cold", ParamType::boolean, ParamRole::query, "false", "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
   };
+}
+
+Params resolve_build_args(const std::map<std::string, std::string>& given) {
+  const std::vector<ParamSpec> specs = ebp_params();
+  std::string build;
+  for (const ParamSpec& s : specs)
+    if (s.role == ParamRole::build && s.name != "store") build += (build.empty() ? "" : ", ") + s.name;
+  for (const ParamSpec& s : specs)
+    if ((s.role != ParamRole::build || s.name == "store") && given.count(s.name))
+      throw InputError("--param " + s.name + ": not a build option (build options: " + build + ")");
+  return Params::resolve("ebp_octree", specs, given);
 }
 
 ebp::BuildParams build_params(const Params& p, int threads) {
@@ -171,7 +182,6 @@ class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
     tree_ = build_tree(mesh, build_params(params_, ctx.threads), ctx.progress);
     start_queries();
   }
-  bool supports(QueryType) const override { return true; }
   /// The tree and one query's stamps (every further thread's query state holds as many again).
   std::size_t structure_bytes() const override {
     return tree_.bytes() + tree_.derived_bytes() +
@@ -200,12 +210,39 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.description =
       "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
       "winding-number crossings, branch-and-bound distance";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, /*out_of_core*/ true};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true;
+  m.caps.distance = true;
+  m.caps.closest_triangle = true;
+  m.caps.coherence = true;
+  m.caps.out_of_core = true;
   // In memory one ebp::Query per thread over the const tree; out of core one page cache per thread
   // over the shared store reader (ooc_method.cpp says why).
   m.caps.concurrent_queries = true;
+  m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
+  // A store carries the build options it was made with (its header; the result records those):
+  // one given beside it would be recorded as run but never used, so it is refused. The options
+  // of the store's page cache mean nothing without one.
+  m.check = [](const Params& p) {
+    const std::string& store = p.get("store");
+    if (!store.empty()) {
+      for (const ParamSpec& s : ebp_params())
+        if (s.role == ParamRole::build && s.name != "store" && p.given(s.name))
+          throw InputError("method ebp_octree: " + s.name + "=" + p.given().at(s.name) + " given beside store=" +
+                           store + ": a store was built with its own build options (its header; `bvhbench ebp "
+                           "info` shows them), and a result records those");
+      return;
+    }
+    for (const char* ooc : {"cache_mb", "cold"})
+      if (p.given(ooc))
+        throw InputError(std::string("method ebp_octree: ") + ooc + "=" + p.given().at(ooc) +
+                         " is an option of the out-of-core store: give store=FILE.ebp with it");
+  };
+  // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells
+  // apart). No store: a suite has none to give.
+  m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core
     return std::make_unique<EbpOctreeMethod>(p);

@@ -1,6 +1,8 @@
 #pragma once
 /// What the in-memory ebp_octree method (ebp_method.cpp) shares with the `bvhbench ebp` commands:
 /// its parameters, the build of a tree from a loaded mesh, and the tree's figures as JSON.
+#include <map>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +16,11 @@ namespace bvhbench {
 
 /// The method's parameters (build, coherence, and the out-of-core store's).
 std::vector<ParamSpec> ebp_params();
+
+/// The options of `ebp build` / `ebp stats` (`--param k=v`, parsed), resolved against the
+/// method's declaration: only build options (ParamRole::build, not `store`) may be given; another
+/// is InputError "--param K: not a build option (build options: ...)".
+Params resolve_build_args(const std::map<std::string, std::string>& given);
 
 /// The build parameters among resolved method parameters `p`, with `threads` build threads.
 ebp::BuildParams build_params(const Params& p, int threads);

@@ -3,6 +3,7 @@
 #include "methods/ebp_octree/ooc_method.hpp"
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -77,7 +78,20 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
       throw file_error(path_, "built from another mesh (sha256 differs from " + mesh.path + ")");
     start_queries();
   }
-  bool supports(QueryType) const override { return true; }
+  /// The options the store was built with, from its header: what a result records as ran.
+  std::map<std::string, std::string> build_options_read() const override {
+    if (!store_) return {};
+    const ebp::FileHeader& h = store_->header();
+    auto real = [](double v) {
+      ParamValue x;
+      x.type = ParamType::real;
+      x.real = v;
+      return x.canonical();
+    };
+    return {{"leaf_factor", real(h.leaf_factor)},
+            {"max_planes", std::to_string(h.max_planes)},
+            {"cluster_angle", real(h.cluster_angle)}};
+  }
   /// The pinned store and the method's own thread's cache (every further thread's cache may hold
   /// as much again, within its share of the budget).
   std::size_t structure_bytes() const override { return own_state() ? own_state()->ooc().bytes() : 0; }

@@ -66,7 +66,6 @@ struct Options {
   bool robust = true;
   int rays = 1;
   bool coherent = false;
-  int threads = 1;
 };
 
 /// State of one point query, handed to the callback through userPtr.
@@ -319,7 +318,7 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
     if (s_->device) rtcReleaseDevice(s_->device);
   }
 
-  void build(const Mesh& mesh, const BuildContext&) override {
+  void build(const Mesh& mesh, const BuildContext& ctx) override {
     if (mesh.triangles.empty()) throw InputError("embree: the mesh has no triangle");
     if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
       throw InputError("embree: more triangles than 32-bit primitive ids can address");
@@ -336,7 +335,8 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
     const Vec3d far = vmax(vmax(s.bounds.lo, -s.bounds.lo), vmax(s.bounds.hi, -s.bounds.hi));
     s.magnitude = std::max({far.x, far.y, far.z});
 
-    const std::string config = "threads=" + std::to_string(s.opt.threads) + ",verbose=0";
+    // The device's threads build the BVH: the job's build threads, as every method's build.
+    const std::string config = "threads=" + std::to_string(std::max(1, ctx.threads)) + ",verbose=0";
     s.device = rtcNewDevice(config.c_str());
     if (!s.device)
       throw std::runtime_error(std::string("embree: rtcNewDevice(\"") + config +
@@ -369,7 +369,6 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
     start_queries();
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override { return buffer_bytes() + s_->bvh_bytes; }
 
@@ -420,8 +419,10 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
   m.description =
       "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
       "by all-hits ray parity with jittered re-shots and majority vote";
-  m.caps = {/*inside*/ true, /*distance*/ true, /*closest_triangle*/ true, /*coherence*/ true, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread query contexts, hit lists and counters over the committed scene
+  m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   // Embree picks its kernels (SSE2, SSE4.2, AVX, AVX2, AVX-512) from the processor when the
   // device is made, and with them the BVH it builds (BVH8 where it may use AVX, else BVH4; on
   // Intel also by CPU model) and the float arithmetic of its tests (AVX2 and AVX-512 kernels
@@ -447,22 +448,22 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
   // coherent seed radius found nothing, which the margin in search_radius() rules out whatever
   // the rounding of Embree's box tests (a change is a broken margin, worth failing the gate).
   m.params = {
-      {"quality", ParamType::choice, "medium", "BVH build quality (high = spatial splits)",
+      {"quality", ParamType::choice, ParamRole::build, "medium", "BVH build quality (high = spatial splits)",
        {"low", "medium", "high"}},
-      {"robust", ParamType::boolean, "true",
+      {"robust", ParamType::boolean, ParamRole::build, "true",
        "RTC_SCENE_FLAG_ROBUST: watertight ray-triangle tests (no ray slips between neighbours)", {}},
-      {"rays", ParamType::choice, "1", "rays per inside test, majority vote", {"1", "3", "5"}},
-      {"coherent", ParamType::boolean, "false",
+      {"rays", ParamType::integer, ParamRole::query, "1", "rays per inside test, majority vote", {"1", "3", "5"}},
+      {"coherent", ParamType::boolean, ParamRole::query, "false",
        "seed the point-query radius with the distance to the previous closest point", {}},
-      {"threads", ParamType::integer, "1", "Embree device threads (build)", {}, 1, 1024},
   };
+  // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
+  m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     Options o;
     o.quality = p.get("quality");
     o.robust = p.get_bool("robust");
-    o.rays = std::stoi(p.get("rays"));
+    o.rays = int(p.get_int("rays"));
     o.coherent = p.get_bool("coherent");
-    o.threads = int(p.get_int("threads"));
     return std::make_unique<Embree>(o);
   };
   r.add(std::move(m));

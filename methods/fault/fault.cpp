@@ -23,7 +23,6 @@ class Fault final : public Method {
     n_ = mesh.num_triangles();
     if (at_ == "build") trigger();
   }
-  bool supports(QueryType) const override { return true; }
   bool inside(const Vec3d& p) override {
     if (at_ == "query") trigger();
     return p.x < 0;
@@ -74,9 +73,10 @@ void bvhbench_register_fault(bvhbench::Registry& r) {
   MethodInfo m;
   m.name = "fault";
   m.description = "Testing only: fails on purpose (crash, abort, hang, oom, throw) to test job isolation";
-  m.caps = {true, true, false, false, false};
-  m.params = {{"mode", ParamType::choice, "none", "what goes wrong", {"none", "crash", "abort", "hang", "oom", "throw"}},
-              {"at", ParamType::choice, "query", "when it goes wrong", {"build", "query"}}};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true;
+  m.params = {{"mode", ParamType::choice, ParamRole::query, "none", "what goes wrong", {"none", "crash", "abort", "hang", "oom", "throw"}},
+              {"at", ParamType::choice, ParamRole::query, "query", "when it goes wrong", {"build", "query"}}};
   m.create = [](const Params& p) { return std::make_unique<Fault>(p); };
   m.testing_only = true;
   r.add(std::move(m));

@@ -26,11 +26,11 @@ DESCRIPTION = ("fcpw: BVH closest point and contains (float32; contains needs a 
 REQUIRES = ["numpy", "fcpw"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "aggregate", "type": "choice", "default": "bvh_surface_area",
+    {"name": "aggregate", "type": "choice", "role": "build", "default": "bvh_surface_area",
      "choices": ["bvh_surface_area", "bvh_overlap_surface_area", "bvh_volume",
                  "bvh_overlap_volume", "bvh_longest_axis_center", "baseline"],
      "help": "fcpw's aggregate: a BVH by its split heuristic, or baseline (every triangle)"},
-    {"name": "vectorize", "type": "boolean", "default": True,
+    {"name": "vectorize", "type": "boolean", "role": "build", "default": True,
      "help": "fcpw's wide (SIMD) BVH nodes"},
     {"name": "rescale", "type": "boolean", "default": True, "role": "build",
      "help": "hand fcpw the mesh and queries scaled by a power of two (exact in float32) to a box "
@@ -40,6 +40,10 @@ PARAMETERS = [
 
 # The size the mesh is scaled to (its box's largest side, within a factor of two).
 RESCALED_SIZE = 1024.0
+
+# The default sweep of a `methods: all` suite (methods/README.md): in batches, what a Python
+# caller gets from arrays (one call per point costs the interpreter in every query).
+SWEEP = ["batch=true"]
 
 
 class Method:

@@ -18,16 +18,20 @@ DESCRIPTION = ("libigl (Python bindings): AABB closest point built once; sign an
 REQUIRES = ["numpy", "igl"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "sign_type", "type": "choice", "default": "winding_number",
+    {"name": "sign_type", "type": "choice", "role": "build", "default": "winding_number",
      "choices": ["winding_number", "fast_winding_number", "pseudonormal"],
      "help": "sign of distance and inside: exact generalized winding number (every triangle per "
              "point) > 0.5, fast winding number > 0.5 (approximate), or the pseudonormal at the "
              "closest feature (needs a closed manifold mesh)"},
-    {"name": "accuracy_scale", "type": "real", "default": 2.0, "min": 0.0, "max": 1e6,
+    {"name": "accuracy_scale", "type": "real", "role": "query", "default": 2.0, "min": 0.0, "max": 1e6,
      "help": "fast winding number: larger is more accurate and slower (libigl recommends 2)"},
-    {"name": "order", "type": "integer", "default": 2, "min": 1, "max": 3,
+    {"name": "order", "type": "integer", "role": "build", "default": 2, "min": 1, "max": 3,
      "help": "fast winding number: Taylor expansion order of its hierarchy"},
 ]
+
+# The default sweep of a `methods: all` suite (methods/README.md): the fast winding number in
+# batches. The exact winding number sums every triangle per point, too slow to run everywhere.
+SWEEP = ["sign_type=fast_winding_number,batch=true"]
 
 # libigl's AABB node: an AlignedBox<double,3> (48 bytes), two child pointers and a primitive index,
 # padded: 72 bytes, 2F-1 nodes. The binding does not report its size; this is the layout's count.

@@ -270,8 +270,7 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
         renormalize_(p.get_bool("renormalize")),
         remove_intersecting_(p.get_bool("isect_cleanup")),
         max_voxels_(double(p.get_int("max_voxels"))),
-        fit_(p.get_bool("fit")),
-        threads_(int(p.get_int("threads"))) {}
+        fit_(p.get_bool("fit")) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     // Without a triangle there is no surface to sample, whatever the query (the voxel size of
@@ -284,7 +283,6 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
     }
   }
 
-  bool supports(QueryType) const override { return true; }
 
   std::size_t structure_bytes() const override {
     std::size_t b = sizeof(*this);
@@ -321,9 +319,7 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
   void build_impl(const Mesh& mesh, const BuildContext& ctx) {
     index_.reset();
     sdf_.reset();
-    std::optional<tbb::global_control> limit;
-    if (threads_ > 0)  // can only lower the job's budget: TBB keeps the smallest active limit
-      limit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads_));
+    // meshToVolume builds on TBB, which the job limits to its build threads (run_job).
 
     const Box3d mb = mesh.bounds();
     const double diag = mb.diagonal();
@@ -432,7 +428,6 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
   double max_voxels_;
   bool fit_;
   double voxel_requested_ = 0;
-  int threads_;
 
   // the structure (grids before their accessors: accessors are destroyed first)
   FloatGrid::Ptr sdf_;
@@ -457,31 +452,32 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
   m.description =
       "OpenVDB signed distance field (meshToVolume): sampled distance, gradient normal and "
       "projection, inside by sign, closest triangle from the polygon-index grid";
-  m.caps = {true, true, true, false, false};
+  // Capabilities, said once here (false unless set).
+  m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true;
   m.caps.concurrent_queries = true;  // per-thread value accessors over grids nobody writes
+  m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   // None: our counters count our own samples of the grid, whose values meshToVolume computes in
   // header templates compiled here (no run-time CPU dispatch: OPENVDB_USE_SSE42/AVX are
   // compile-time switches, off; libopenvdb itself has no CPUID or ifunc). Each voxel's distance
   // is a minimum over triangles, the same however TBB splits the work.
   m.machine_dependent_counters = {};
   m.params = {
-      {"voxel", ParamType::real, "1.0", "voxel size relative to the mean edge length", {}, 1e-6, 1e6},
-      {"voxel_abs", ParamType::real, "0", "absolute voxel size (world units); overrides voxel when > 0", {}, 0.0, 1e308},
-      {"band", ParamType::choice, "auto",
+      {"voxel", ParamType::real, ParamRole::build, "1.0", "voxel size relative to the mean edge length", {}, 1e-6, 1e6},
+      {"voxel_abs", ParamType::real, ParamRole::build, "0", "absolute voxel size (world units); overrides voxel when > 0", {}, 0.0, 1e308},
+      {"band", ParamType::choice, ParamRole::build, "auto",
        "auto: narrow band for inside jobs, band reaching the whole query box for distance jobs; "
        "fixed: ex_band/in_band as given",
        {"auto", "fixed"}},
-      {"ex_band", ParamType::real, "3", "exterior band width in voxels (the minimum under band=auto)", {}, 1.0, 1e6},
-      {"in_band", ParamType::real, "3", "interior band width in voxels (the minimum under band=auto)", {}, 1.0, 1e6},
-      {"order", ParamType::integer, "1", "sampler: 1 trilinear, 2 triquadratic", {}, 1, 2},
-      {"closest_steps", ParamType::integer, "2", "gradient projections toward the surface for the closest point", {}, 0, 16},
-      {"closest_triangle", ParamType::boolean, "true", "keep the polygon-index grid (distance jobs) to report the closest triangle", {}},
-      {"renormalize", ParamType::boolean, "true", "meshToVolume renormalisation (off: DISABLE_RENORMALIZATION)", {}},
-      {"isect_cleanup", ParamType::boolean, "true",
+      {"ex_band", ParamType::real, ParamRole::build, "3", "exterior band width in voxels (the minimum under band=auto)", {}, 1.0, 1e6},
+      {"in_band", ParamType::real, ParamRole::build, "3", "interior band width in voxels (the minimum under band=auto)", {}, 1.0, 1e6},
+      {"order", ParamType::integer, ParamRole::query, "1", "sampler: 1 trilinear, 2 triquadratic", {}, 1, 2},
+      {"closest_steps", ParamType::integer, ParamRole::query, "2", "gradient projections toward the surface for the closest point", {}, 0, 16},
+      {"closest_triangle", ParamType::boolean, ParamRole::build, "true", "keep the polygon-index grid (distance jobs) to report the closest triangle", {}},
+      {"renormalize", ParamType::boolean, ParamRole::build, "true", "meshToVolume renormalisation (off: DISABLE_RENORMALIZATION)", {}},
+      {"isect_cleanup", ParamType::boolean, ParamRole::build, "true",
        "meshToVolume removal of self-intersection voxels (off: DISABLE_INTERSECTING_VOXEL_REMOVAL)", {}},
-      {"max_voxels", ParamType::integer, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
-      {"fit", ParamType::boolean, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
-      {"threads", ParamType::integer, "0", "build threads; 0 = the job's --threads (a value can only lower it)", {}, 0, 1024},
+      {"max_voxels", ParamType::integer, ParamRole::build, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
+      {"fit", ParamType::boolean, ParamRole::build, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
   };
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));

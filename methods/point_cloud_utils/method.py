@@ -26,10 +26,10 @@ DESCRIPTION = ("point-cloud-utils: closest_points_on_mesh (libigl AABB built per
 REQUIRES = ["numpy", "point_cloud_utils"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = []
-# Left out of `methods: all` suites (make bench's default suite: 20,000 points a job): its distance
-# ran at 112 queries/s on random points of the 1M bunny (libigl's AABB built per call, then every
-# point), ~3 minutes a pass. suites/python.yml runs it.
-SWEEP = []
+# The default sweep of `methods: all` suites: whole query sets. (Those suites run on small models:
+# on the 1M bunny its distance ran at 112 queries/s on random points, libigl's AABB built per
+# call; suites/python.yml runs it there on few points.)
+SWEEP = ["batch=true"]
 
 
 def _on_longest_edge(P, T):

@@ -2,7 +2,7 @@
 
 The C++ host (python_method.cpp) embeds the interpreter and calls these functions; it never names a
 method. A Python method is a folder holding `method.py` with module-level literal declarations
-(DESCRIPTION, REQUIRES, CAPABILITIES, PARAMETERS) and a class `Method`.
+(DESCRIPTION, REQUIRES, CAPABILITIES, PARAMETERS, optionally SWEEP) and a class `Method`.
 
 Why the declarations are literals read with `ast`: `bvhbench methods`, `run` and every suite job
 make the registry, and importing trimesh or igl costs seconds; reading literals costs
@@ -16,7 +16,9 @@ import os
 import sys
 
 DECLARED = ("DESCRIPTION", "REQUIRES", "CAPABILITIES", "PARAMETERS")
+OPTIONAL = ("SWEEP",)  # the default sweep of `methods: all` suites (methods/README.md)
 PARAM_TYPES = ("integer", "real", "boolean", "text", "choice")
+PARAM_ROLES = ("build", "query")  # shapes the structure, or only how it is queried
 TYPE_ALIASES = {"int": "integer", "bool": "boolean"}  # the names `bvhbench methods` shows
 CAPABILITY_KEYS = ("inside", "distance", "closest_triangle")
 
@@ -77,7 +79,8 @@ def read_declarations(folder):
 
     Returns a dict: name (the folder's name), description (str), requires (list of top-level
     module names), capabilities (dict of CAPABILITY_KEYS -> bool), parameters (list of dicts with
-    name, type, default (str), help, choices, min, max), missing (the required modules
+    name, type, role, default (str), help, choices, min, max), sweep (list of "k=v,k=v" texts:
+    the variants a `methods: all` suite runs; [""] when SWEEP is not declared), missing (the required modules
     `find_spec` cannot find), path. Raises DeclarationError naming the file and the problem."""
     path = os.path.join(folder, "method.py")
     try:
@@ -88,7 +91,7 @@ def read_declarations(folder):
     found = {}
     for node in tree.body:
         if (isinstance(node, ast.Assign) and len(node.targets) == 1
-                and isinstance(node.targets[0], ast.Name) and node.targets[0].id in DECLARED):
+                and isinstance(node.targets[0], ast.Name) and node.targets[0].id in DECLARED + OPTIONAL):
             try:
                 found[node.targets[0].id] = ast.literal_eval(node.value)
             except ValueError:
@@ -113,9 +116,12 @@ def read_declarations(folder):
         raise DeclarationError(f"{path}: CAPABILITIES must map some of {CAPABILITY_KEYS} to booleans")
     params = []
     for i, p in enumerate(found["PARAMETERS"]):
-        if not isinstance(p, dict) or not {"name", "type", "default", "help"} <= set(p):
+        if not isinstance(p, dict) or not {"name", "type", "role", "default", "help"} <= set(p):
             raise DeclarationError(f"{path}: PARAMETERS[{i}] must be a dict with name, type, "
-                                   "default and help")
+                                   "role, default and help")
+        if p["role"] not in PARAM_ROLES:
+            raise DeclarationError(f"{path}: parameter {p['name']!r}: role must be one of {PARAM_ROLES} "
+                                   "(build: it shapes the structure; query: only how it is asked)")
         p = dict(p, type=TYPE_ALIASES.get(p["type"], p["type"]))
         if p["type"] not in PARAM_TYPES:
             raise DeclarationError(f"{path}: parameter {p['name']!r}: type must be one of {PARAM_TYPES}")
@@ -123,23 +129,16 @@ def read_declarations(folder):
             raise DeclarationError(f"{path}: parameter 'batch' is the harness's own")
         default = p["default"]
         default = ("true" if default else "false") if isinstance(default, bool) else str(default)
-        params.append({"name": str(p["name"]), "type": p["type"], "default": default,
+        params.append({"name": str(p["name"]), "type": p["type"], "role": p["role"], "default": default,
                        "help": str(p["help"]), "choices": [str(c) for c in p.get("choices", [])],
                        "min": float(p.get("min", -1e308)), "max": float(p.get("max", 1e308))})
+    sweep = found.get("SWEEP", [""])
+    if not (isinstance(sweep, (list, tuple)) and all(isinstance(e, str) for e in sweep)):
+        raise DeclarationError(f"{path}: SWEEP must be a list of parameter texts (\"k=v,k=v\"; \"\" = defaults)")
     missing = [r for r in requires if importlib.util.find_spec(r) is None]
     return {"name": os.path.basename(os.path.normpath(folder)), "description": description,
             "requires": list(requires), "capabilities": {k: caps.get(k, False) for k in CAPABILITY_KEYS},
-            "parameters": params, "missing": missing, "path": path}
-
-
-def _typed(value, kind):
-    if kind == "integer":
-        return int(value)
-    if kind == "real":
-        return float(value)
-    if kind == "boolean":
-        return value == "true"
-    return value
+            "parameters": params, "sweep": list(sweep), "missing": missing, "path": path}
 
 
 def module_version(name):
@@ -159,8 +158,8 @@ def module_version(name):
 def create(folder, values):
     """Imports `folder`/method.py under a name of its own and returns (instance, versions).
 
-    `values` maps every declared parameter to its validated text (the C++ Params); the instance
-    is `Method(**typed values)`. `versions` maps each required module to its installed version."""
+    `values` maps every declared parameter to its value, typed by the C++ Params from the
+    declaration (int, float, bool or str); the instance is `Method(**values)`. `versions` maps each required module to its installed version."""
     decl = read_declarations(folder)
     name = "bvhbench_method_" + decl["name"]
     module = sys.modules.get(name)
@@ -173,9 +172,8 @@ def create(folder, values):
         except BaseException:
             del sys.modules[name]
             raise
-    kinds = {p["name"]: p["type"] for p in decl["parameters"]}
-    kwargs = {k: _typed(v, kinds[k]) for k, v in values.items() if k in kinds}
-    instance = module.Method(**kwargs)
+    declared = {p["name"] for p in decl["parameters"]}
+    instance = module.Method(**{k: v for k, v in values.items() if k in declared})
     versions = {r: module_version(r) for r in decl["requires"]}
     return instance, versions
 

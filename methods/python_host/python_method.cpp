@@ -86,9 +86,19 @@ PythonMethod::PythonMethod(PythonMethodDeclaration decl, const Params& params) :
   const PythonRuntime& rt = python_runtime();
   if (!rt.ok) throw std::runtime_error(decl_.name + ": " + rt.problem);
   call("import and create", [&] {
+    // Typed here, from the declaration: the method gets int, float, bool or str, never a text to parse.
     py::dict values;
-    for (const auto& [k, v] : params.values())
-      if (k != "batch") values[py::str(k)] = v;
+    for (const auto& [k, text] : params.values()) {
+      if (k == "batch") continue;
+      const ParamValue& v = params.value(k);
+      switch (v.type) {
+        case ParamType::integer: values[py::str(k)] = py::int_(v.integer); break;
+        case ParamType::real: values[py::str(k)] = py::float_(v.real); break;
+        case ParamType::boolean: values[py::str(k)] = py::bool_(v.boolean); break;
+        case ParamType::text:
+        case ParamType::choice: values[py::str(k)] = py::str(v.text); break;
+      }
+    }
     py::tuple made = rt.host.attr("create")(decl_.folder, values);
     instance_ = made[0];
     for (auto item : made[1].cast<py::dict>())

@@ -11,7 +11,7 @@
 /// supports(query) -> bool and info() -> dict.
 ///
 /// With `batch=true` the harness calls inside(P) / distance(P) once per pass on the whole query
-/// set (Method::answers_in_batches()); otherwise once per query, so that a query's latency
+/// set (it is a BatchAnswers, harness/core/batch_answers.hpp); otherwise once per query, so that a query's latency
 /// includes the interpreter's cost, as it would for a Python caller. Every answer is checked
 /// (type, shape, finite): a wrong one throws, so the job ends with status `error` and a message
 /// naming the method, the call and the problem.
@@ -20,6 +20,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include "harness/core/batch_answers.hpp"
 #include "harness/core/method.hpp"
 
 namespace bvhbench {
@@ -30,7 +31,7 @@ struct PythonMethodDeclaration {
   Capabilities caps;
 };
 
-class PythonMethod final : public Method {
+class PythonMethod final : public Method, public BatchAnswers {
  public:
   /// Imports the module and makes its Method from `params` (every declared one, validated).
   /// Throws UnsupportedError when the module raises NotImplementedError, std::runtime_error

@@ -55,11 +55,13 @@ MethodInfo method_info(const py::dict& d, const std::string& folder) {
   decl.caps.distance = caps["distance"].cast<bool>();
   decl.caps.closest_triangle = caps["closest_triangle"].cast<bool>();
   m.caps = decl.caps;
+  m.caps.build_threads = BuildThreads::library;  // numpy and the library pick their own
   for (auto p : d["parameters"].cast<py::list>()) {
     py::dict pd = p.cast<py::dict>();
     ParamSpec s;
     s.name = pd["name"].cast<std::string>();
     s.type = param_type(pd["type"].cast<std::string>());
+    s.role = pd["role"].cast<std::string>() == "query" ? ParamRole::query : ParamRole::build;
     s.default_value = pd["default"].cast<std::string>();
     s.help = pd["help"].cast<std::string>();
     s.choices = pd["choices"].cast<std::vector<std::string>>();
@@ -68,9 +70,10 @@ MethodInfo method_info(const py::dict& d, const std::string& folder) {
     m.params.push_back(std::move(s));
   }
   // The harness's own parameter of every Python method: its own row, like coherent=true.
-  m.params.push_back({"batch", ParamType::boolean, "false",
+  m.params.push_back({"batch", ParamType::boolean, ParamRole::query, "false",
                       "answer the whole query set per call: throughput per whole-set call, no per-query latency",
                       {}, 0, 1});
+  m.sweep = d["sweep"].cast<std::vector<std::string>>();
   m.create = [decl](const Params& p) { return std::make_unique<PythonMethod>(decl, p); };
   return m;
 }
@@ -115,7 +118,14 @@ void bvhbench_register_python_host(bvhbench::Registry& r) {
                                  ", not installed (make deps installs what pyproject.toml lists; " + rt.packages + ")");
         continue;
       }
-      r.add(method_info(d, folder));
+      MethodInfo m = method_info(d, folder);
+      // A sweep entry that names no parameter or a bad value is the folder's mistake: said here,
+      // when the method is found, not when a `methods: all` suite first expands it.
+      if (const std::string bad = sweep_problem(m); !bad.empty()) {
+        r.add_left_out(name, folder + "/method.py: SWEEP: " + bad);
+        continue;
+      }
+      r.add(std::move(m));
     } catch (py::error_already_set& e) {
       r.add_left_out(name, python_error_text(e));
     } catch (const py::cast_error& e) {

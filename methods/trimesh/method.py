@@ -32,7 +32,7 @@ DESCRIPTION = ("trimesh: ProximityQuery.on_surface closest point, contains (ray 
 REQUIRES = ["numpy", "trimesh", "rtree"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = [
-    {"name": "ray", "type": "choice", "default": "embree", "choices": ["embree", "native"],
+    {"name": "ray", "type": "choice", "role": "build", "default": "embree", "choices": ["embree", "native"],
      "help": "contains' ray backend: Embree through embreex (unsupported when embreex is not "
              "installed) or trimesh's own (rtree and numpy)"},
     {"name": "rescale", "type": "boolean", "default": True, "role": "build",
@@ -43,6 +43,10 @@ PARAMETERS = [
 
 # The size the mesh is scaled to (its box's largest side, within a factor of two).
 RESCALED_SIZE = 1024.0
+
+# The default sweep of a `methods: all` suite (methods/README.md): in batches, what a Python
+# caller gets from arrays (one call per point costs the interpreter in every query).
+SWEEP = ["batch=true"]
 
 
 class Method:

@@ -220,7 +220,6 @@ INSTANTIATE_TEST_SUITE_P(Methods, ConcurrentQueries, testing::ValuesIn(cases()),
 class SingleThreadOnly final : public Method {
  public:
   void build(const Mesh&, const BuildContext&) override {}
-  bool supports(QueryType) const override { return true; }
   bool inside(const Vec3d& p) override { return p.x < 0; }
   std::size_t structure_bytes() const override { return 1; }
 };

@@ -5,7 +5,7 @@
 // What every method must do (methods/README.md, "The interface"; docs/architecture.md, "Contracts"):
 //  - answer inside and distance like brute_force on the real shared meshes, for random and haptic
 //    query sets made by the harness's own generators, within what its precision allows (below);
-//  - supports() agrees with the registered capabilities; structure_bytes() > 0 after build; the
+//  - answers() (the registered capabilities, narrowed by supports()) agrees with the registered capabilities; structure_bytes() > 0 after build; the
 //    work counters are deterministic (the same pass twice counts the same) and reset to zero;
 //  - the coherent variant gives the default's answers along a haptic path, pass after pass;
 //  - the empty mesh is refused with an InputError, or answered as documented below;
@@ -368,7 +368,7 @@ INSTANTIATE_TEST_SUITE_P(Registered, MethodOnSharedMesh,
                          ::testing::Combine(::testing::ValuesIn(registered_variants()), ::testing::ValuesIn(kMeshes)),
                          VariantMeshName());
 
-// supports() is what the registry says the method answers; a query it does not support throws
+// answers() is what the registry says the method answers; a query it does not support throws
 // UnsupportedError (the harness records `unsupported`, it never fakes an answer); coherence is
 // declared as the boolean parameter `coherent`, off by default, which this suite turns on.
 TEST_P(MethodConformance, SupportsWhatItRegistered) {
@@ -387,15 +387,15 @@ TEST_P(MethodConformance, SupportsWhatItRegistered) {
   for (QueryType qt : {QueryType::inside, QueryType::distance}) {
     SCOPED_TRACE(std::string(v.spec) + " built for " + to_string(qt));
     auto m = build_for(v.spec, mesh, qt, q);
-    EXPECT_EQ(m->supports(QueryType::inside), info->caps.inside);
-    EXPECT_EQ(m->supports(QueryType::distance), info->caps.distance);
-    if (qt == QueryType::inside && !m->supports(QueryType::inside)) {
+    EXPECT_EQ(answers(*info, *m, QueryType::inside), info->caps.inside);
+    EXPECT_EQ(answers(*info, *m, QueryType::distance), info->caps.distance);
+    if (qt == QueryType::inside && !answers(*info, *m, QueryType::inside)) {
       EXPECT_THROW((void)m->inside(q[0]), UnsupportedError);
     }
-    if (qt == QueryType::distance && !m->supports(QueryType::distance)) {
+    if (qt == QueryType::distance && !answers(*info, *m, QueryType::distance)) {
       EXPECT_THROW((void)m->distance(q[0]), UnsupportedError);
     }
-    if (qt == QueryType::distance && m->supports(QueryType::distance)) {
+    if (qt == QueryType::distance && answers(*info, *m, QueryType::distance)) {
       const DistanceResult d = m->distance(q[1]);
       if (info->caps.closest_triangle) {
         EXPECT_GE(d.triangle, 0);

@@ -40,14 +40,14 @@ void PrintTo(const MethodVariants& m, std::ostream* os) { *os << m.method; }
 const std::vector<MethodVariants>& float32_method_variants() {
   static const std::vector<MethodVariants> table = {
       {"cgal_aabb",
-       {"kernel", "kd_tree", "coherent", "threads"},
+       {"kernel", "kd_tree", "coherent"},
        {"cgal_aabb:kernel=simple_cartesian", "cgal_aabb:kd_tree=false",
         "cgal_aabb:kernel=simple_cartesian,coherent=true,kd_tree=false"},
        "cgal_aabb:kernel=simple_cartesian,kd_tree=false",
        "cgal_aabb:kd_tree=false",
        "cgal_aabb:coherent=true,kd_tree=false"},
       {"embree",
-       {"quality", "robust", "rays", "coherent", "threads"},
+       {"quality", "robust", "rays", "coherent"},
        {"embree:quality=low", "embree:quality=high", "embree:robust=false", "embree:rays=3", "embree:rays=5",
         "embree:quality=high,robust=false,coherent=true,rays=3"},
        "embree:quality=high,rays=3",

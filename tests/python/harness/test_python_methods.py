@@ -45,9 +45,10 @@ DESCRIPTION = "toy: nearest vertex"
 REQUIRES = ["numpy"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": False}
 PARAMETERS = [
-    {"name": "scale", "type": "real", "default": 1.0, "min": 0.0, "max": 10.0, "help": "radius factor"},
-    {"name": "mode", "type": "choice", "default": "plain", "choices": ["plain", "raise", "shape", "nan"],
-     "help": "how to misbehave"},
+    {"name": "scale", "type": "real", "role": "build", "default": 1.0, "min": 0.0, "max": 10.0,
+     "help": "radius factor"},
+    {"name": "mode", "type": "choice", "role": "query", "default": "plain",
+     "choices": ["plain", "raise", "shape", "nan"], "help": "how to misbehave"},
 ]
 
 
@@ -150,7 +151,10 @@ def test_toy_in_a_temporary_folder_is_listed_with_its_parameters(host, toy):
     assert m["description"] == "toy: nearest vertex [Python]"
     assert m["capabilities"]["inside"] and m["capabilities"]["distance"] and not m["capabilities"]["closest_triangle"]
     params = {p["name"]: p for p in m["params"]}
-    assert params["scale"]["type"] == "real" and params["scale"]["default"] == "1.0"
+    assert params["scale"]["type"] == "real" and params["scale"]["default"] == "1"  # canonical
+    assert params["scale"]["role"] == "build" and params["mode"]["role"] == "query"
+    assert params["batch"]["role"] == "query"
+    assert m["sweep"] == [""]  # no SWEEP declared: the defaults
     assert params["mode"]["choices"] == ["plain", "raise", "shape", "nan"]
     assert params["batch"]["type"] == "bool" and params["batch"]["default"] == "false"
     run("run", "--mesh", MESH, "--method", "toy:scale=11", "--queries", "x.npy", "--query", "inside",
@@ -260,6 +264,16 @@ def test_malformed_declarations_leave_the_method_out_with_a_note(host, toy):
     methods, notes = listing(with_methods(toy))
     assert "toy" not in methods
     assert "method toy left out" in notes and "DESCRIPTION must be a literal" in notes
+
+
+def test_an_option_without_a_role_or_a_bad_sweep_leaves_the_method_out(host, toy):
+    (toy / "method.py").write_text(TOY.replace('"role": "build", ', ""))
+    methods, notes = listing(with_methods(toy))
+    assert "toy" not in methods and "role" in notes
+    (toy / "method.py").write_text(TOY + '\nSWEEP = ["scale=99"]\n')
+    methods, notes = listing(with_methods(toy))
+    assert "toy" not in methods
+    assert "SWEEP" in notes and "scale=99" in notes and "out of range" in notes
 
 
 # ---- the library methods ----

@@ -24,6 +24,8 @@ import result_schema  # noqa: E402
 FIXTURE = ROOT / "tests" / "fixtures" / "results_small"
 # Fields that are only written when they apply and that the fixture's suite does not provoke.
 CONDITIONAL = {"job.queries.mesh_mismatch": "only when a query set was made on another mesh",
+               "job.params_read_from_structure": "only for a structure read from a file (an EBP-Octree store; "
+                                                 "tests/python/harness/test_ebp_store_options.py)",
                # The fixture is a local run on one thread; test_suite_dask.py and test_threads.py
                # check these where they are written.
                **{f: "only in a suite run by the Dask executor"

@@ -42,6 +42,9 @@ def test_split_points_on_two_threads_answer_as_one(bvhbench, shared_meshes, tmp_
     t = two["queries"]["threads"]
     assert t["count"] == 2 and t["mode"] == "split" and two["job"]["threads"] == 2
     assert len(t["single_thread_qps"]["samples"]) == 2 and t["speedup"] > 0
+    # Build threads: the job's T for a method that builds on them, 1 for CGAL's sequential build.
+    parallel_build = method.startswith("ebp_octree")
+    assert one["build"]["threads"] == 1 and two["build"]["threads"] == (2 if parallel_build else 1)
     assert two["queries"]["n"] == one["queries"]["n"] == 300
     for key in a1:
         assert np.array_equal(a1[key], a2[key]), key

@@ -351,6 +351,19 @@ def test_stress_suite_recognised_by_its_failures():
                                                                                   "d"}
 
 
+def test_stress_cases_are_what_the_dataset_manifest_says():
+    """The runner records the manifest's kind of a mesh (job.mesh.dataset.kind): it decides,
+    whatever the mesh is called; the name rule is only for results without it."""
+    def job(mesh, kind, closed=True):
+        j = _job(mesh, "ok")
+        j.raw["job"]["mesh"]["dataset"] = {"kind": kind, "family": "f", "manifest": "m.json", "closed": closed}
+        return j
+    jobs = [job("weird_shape", "stress"), job("stress_looking_name", "real"), job("a_scan", "real", False),
+            _job("cow", "ok"), _job("stress_by_name", "ok")]
+    assert results_io.ResultSet("/tmp/suite", jobs, [], []).stress_meshes == {"weird_shape", "a_scan",
+                                                                               "stress_by_name"}
+
+
 def test_a_reader_cannot_ask_for_a_field_nobody_writes():
     """Job.get takes only paths of harness/run/result_schema.json, so a chart or table reading a
     field the runner does not write fails in the first test that draws it."""

@@ -45,6 +45,17 @@ TEST(ResultSchema, CompiledSchemaIsTheFilesVersion) {
   EXPECT_EQ(s.summary_columns().front().column, "job_id");
 }
 
+// One home for the job statuses: the schema's enum. The runner's names are those, in that order,
+// and a result with another status is refused.
+TEST(ResultSchema, StatusesAreTheSchemasEnum) {
+  const std::vector<std::string>& in_schema = ResultSchema::get().statuses();
+  ASSERT_EQ(in_schema.size(), std::size(status::all));
+  for (std::size_t i = 0; i < in_schema.size(); ++i) EXPECT_EQ(in_schema[i], status::all[i]);
+  json r = status_row();
+  r["status"] = "exploded";
+  EXPECT_NE(refusal(r).find("status 'exploded' is none of: ok, unsupported"), std::string::npos) << refusal(r);
+}
+
 TEST(ResultSchema, DescribeMatchesExactThenWildcardThenFreeForm) {
   const ResultSchema& s = ResultSchema::get();
   ASSERT_NE(s.describe({"queries", "latency_ns", "p99"}), nullptr);

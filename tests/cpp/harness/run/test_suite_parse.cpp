@@ -3,8 +3,10 @@
 // yaml-cpp exception or a message without the file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 
+#include "harness/core/registry.hpp"
 #include "harness/run/suite.hpp"
 #include "harness/util/errors.hpp"
 #include "support/test_support.hpp"
@@ -102,4 +104,26 @@ TEST(SuiteParse, TheThreadAxisMakesOneJobPerThreadCount) {
   for (const char* bad : {"0", "-2", "1025", "two", "[]", "{a: 1}"})
     expect_input_error([&] { parse_suite(suite("[brute_force]") + "    threads: " + bad + "\n", "s.yml"); }, "s.yml",
                        "threads");
+}
+
+// `methods: all` is every registered method but the testing-only ones, each with the sweep its
+// registration declares; `except:` leaves some out and must name methods.
+TEST(SuiteParse, MethodsAllIsEveryMethodWithItsOwnSweep) {
+  const SuiteConfig cfg = parse_suite(suite("all", "[inside]"), "s.yml");
+  std::vector<std::string> specs;
+  for (const JobPlan& j : cfg.jobs) specs.push_back(j.method.text);
+  EXPECT_EQ(specs, Registry::global().all_method_specs());
+  EXPECT_NE(std::find(specs.begin(), specs.end(), "brute_force"), specs.end());
+  EXPECT_EQ(std::find(specs.begin(), specs.end(), "fault"), specs.end());
+  for (const MethodInfo& m : Registry::global().methods()) {
+    if (m.testing_only) continue;
+    for (const std::string& entry : m.sweep)
+      EXPECT_NE(std::find(specs.begin(), specs.end(), entry.empty() ? m.name : m.name + ":" + entry), specs.end())
+          << m.name << ":" << entry;
+  }
+  const SuiteConfig some = parse_suite(suite("[{all: true, except: [brute_force]}, brute_force]", "[inside]"), "s.yml");
+  EXPECT_EQ(some.jobs.size(), cfg.jobs.size());  // brute_force is back once, by name
+  expect_input_error([] { parse_suite(suite("[{all: true, except: [no_such]}]"), "s.yml"); }, "s.yml",
+                     "except: names no method: 'no_such'");
+  expect_input_error([] { parse_suite(suite("[{all: true, only: [x]}]"), "s.yml"); }, "s.yml", "unknown key 'only'");
 }

@@ -126,7 +126,7 @@ TEST(OpenVdb, ListedWithParameters) {
   const MethodInfo* m = openvdb_info();
   EXPECT_TRUE(m->caps.inside);
   EXPECT_TRUE(m->caps.distance);
-  for (const char* p : {"voxel", "voxel_abs", "band", "ex_band", "in_band", "order", "closest_steps", "max_voxels", "threads"})
+  for (const char* p : {"voxel", "voxel_abs", "band", "ex_band", "in_band", "order", "closest_steps", "max_voxels"})
     EXPECT_TRUE(std::any_of(m->params.begin(), m->params.end(), [&](const ParamSpec& s) { return s.name == p; })) << p;
 }
 
