@@ -35,7 +35,7 @@ class NoData(Exception):
 
 Chart = namedtuple("Chart", "func title caption")
 
-KIND_ORDER = ["random", "near", "haptic"]
+KIND_ORDER = ["random", "near", "haptic", "contact"]
 MAX_PANELS = 9
 
 

@@ -28,7 +28,8 @@ Figure = namedtuple("Figure", "key label query kind hz")
 
 LABELS = {"pis_random": "Point-in-solid, random points",
           "pis_haptic": "Point-in-solid, haptic path",
-          "dist_haptic": "Distance and normal, haptic path"}
+          "dist_haptic": "Distance and normal, haptic path",
+          "dist_contact": "Distance and normal, probe in contact (contact path)"}
 # The paper table's rate columns, each with its published rate.
 FIGURES = [Figure(key, LABELS[key], query, kind, tables.PAPER_REFERENCE[key + "_hz"])
            for key, query, kind in tables.RATE_COLUMNS]
@@ -96,7 +97,7 @@ def table(verdicts_):
     header = ["Published figure", "Paper (2016)", "This run (EBP-Octree)", "Reproduced"]
     rows = []
     for v in verdicts_:
-        published = ("≈" if v.figure.key == "dist_haptic" else "") + fmt.hz(v.figure.hz)
+        published = ("≈" if v.figure.query == "distance" else "") + fmt.hz(v.figure.hz)
         rows.append([v.figure.label, published, v.evidence, v.verdict])
     return header, rows
 

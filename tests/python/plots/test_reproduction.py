@@ -91,4 +91,18 @@ def test_the_paper_table_has_a_reproduced_row_and_a_table_of_verdicts():
     assert row[header.index("Distance haptic")] == "not met"
     h, detail = reproduction.table(vs)
     assert h[-1] == "Reproduced" and [r[-1] for r in detail] == ["met", "not measured",
-                                                                 "not met"]
+                                                                 "not met", "not measured"]
+
+
+def test_the_contact_path_is_a_column_of_its_own():
+    # A probe in contact (the contact query kind) is judged apart from the haptic path with its
+    # approach and leave phases: fast in contact does not make the haptic figure, nor the reverse.
+    rs = results_io.ResultSet("/tmp/default", [job(5e5), job(1.1e6, kind="contact")], [], [])
+    v = {x.figure.key: x for x in reproduction.verdicts(rs)}
+    assert v["dist_contact"].verdict == reproduction.MET and v["dist_contact"].rate == 1.1e6
+    assert v["dist_haptic"].verdict == reproduction.NOT_MET and v["dist_haptic"].rate == 5e5
+    (header, rows, _), (rh, ratios, _) = tables.paper_tables(rs)
+    star = next(r for r in rows if r[header.index("Method")] == "ebp_octree")
+    assert star[header.index("Distance contact")] == "1.1 MHz"
+    assert star[header.index("Distance haptic")] == "500 kHz"
+    assert "Distance contact: EBP/peer" in rh
