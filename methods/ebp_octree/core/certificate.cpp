@@ -264,10 +264,23 @@ bool CertifiedPath::prefer_plain() {
     if (--plain_left_ == 0) trial_ = true;
     return true;
   }
+  if (probe_left_ > 0) {
+    --probe_left_;
+    return true;
+  }
   if (trial_) {  // after a streak: one certificate, whose cost replaces the estimate
     trial_ = false;
     fresh_ = true;
     return false;
+  }
+  if (cert_work_ >= 0 && (plain_work_ < 0 || certs_since_plain_ >= kProbeEvery)) {
+    // the plain estimate is missing or old: measure it (this query is the probe's first)
+    cert.clear();
+    probe_left_ = kProbe - 1;
+    probe_n_ = 0;
+    probe_sum_ = 0;
+    certs_since_plain_ = 0;
+    return true;
   }
   if (cert_work_ >= 0 && plain_work_ >= 0 && cert_work_ > plain_work_) {
     cert.clear();
@@ -280,6 +293,17 @@ bool CertifiedPath::prefer_plain() {
   return false;
 }
 
+void CertifiedPath::plain_answered(double work) {
+  certs_since_plain_ = 0;
+  if (probe_n_ < kProbe) {  // a probe's search: the estimate is its mean
+    probe_sum_ += work;
+    ++probe_n_;
+    plain_work_ = probe_sum_ / double(probe_n_);
+    return;
+  }
+  plain_work_ = plain_work_ < 0 ? work : plain_work_ + (work - plain_work_) / 8;
+}
+
 void CertifiedPath::reset() {
   have_prev_ = false;
   dir_ = Vec3d(0, 0, 0);
@@ -290,6 +314,9 @@ void CertifiedPath::reset() {
   account_open_ = trial_ = fresh_ = false;
   plain_left_ = 0;
   streak_ = kPlainStreakMin;
+  certs_since_plain_ = probe_left_ = 0;
+  probe_n_ = kProbe;
+  probe_sum_ = 0;
   nsteps_ = next_ = 0;
   sign_ok_ = false;
   cert.clear();
