@@ -282,7 +282,9 @@ bool CertifiedPath::prefer_plain() {
     certs_since_plain_ = 0;
     return true;
   }
-  if (cert_work_ >= 0 && plain_work_ >= 0 && cert_work_ > plain_work_) {
+  // A margin (kPlainMargin): the estimates are averages of noisy samples, and on the small models
+  // certificates that were about as dear as plain searches still won over the next stretch.
+  if (cert_work_ >= 0 && plain_work_ >= 0 && cert_work_ > kPlainMargin * plain_work_) {
     cert.clear();
     plain_left_ = streak_ - 1;  // this query is the streak's first
     if (plain_left_ == 0) trial_ = true;

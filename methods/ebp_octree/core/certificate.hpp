@@ -70,6 +70,10 @@ inline constexpr unsigned kPlainStreakMin = 16, kPlainStreakMax = 1024;
 /// estimate was the path's first search (a descent from the root, ~3x a coherent one on the 1M
 /// bunny), so certificates that cost twice a coherent search looked cheaper than it.
 inline constexpr unsigned kProbeEvery = 16, kProbe = 4;
+/// Plain streaks start when certificates cost more than kPlainMargin x a plain search per query
+/// (callgrind, auto, instructions per query, margin 1 / 1.25 / 1.5: cow haptic 2,277 / 2,206 /
+/// 2,202, rocker-arm haptic 2,913 / 2,796 / 2,804, 1M bunny contact 5,406 / 5,425 / 5,460).
+inline constexpr double kPlainMargin = 1.25;
 
 /// The rule's constants (a struct so that a measurement can vary them in one place).
 struct CertificateRule {
