@@ -239,7 +239,13 @@ CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
 }
 
 Vec3d CertifiedPath::ahead(const Vec3d& q) const {
-  const Vec3d c = q + dir_ * (cert.rule().ahead * last_r_);
+  Vec3d dir(0, 0, 0);  // the last step's direction (unit, or zero)
+  if (nsteps_ > 0) {
+    const Vec3d& m = moves_[(next_ + kStepWindow - 1) % kStepWindow];
+    const double len = norm(m);
+    if (len > 0) dir = m / len;
+  }
+  const Vec3d c = q + dir * (cert.rule().ahead * last_r_);
   return std::isfinite(c.x + c.y + c.z) ? c : q;
 }
 
@@ -308,7 +314,6 @@ void CertifiedPath::plain_answered(double work) {
 
 void CertifiedPath::reset() {
   have_prev_ = false;
-  dir_ = Vec3d(0, 0, 0);
   last_r_ = 0;
   plain_work_ = cert_work_ = -1;
   account_work_ = 0;
@@ -326,8 +331,7 @@ void CertifiedPath::reset() {
 
 void CertifiedPath::step_to(const Vec3d& q) {
   if (have_prev_) {
-    steps_[next_] = norm(q - prev_);
-    dir_ = steps_[next_] > 0 ? (q - prev_) / steps_[next_] : Vec3d(0, 0, 0);
+    moves_[next_] = q - prev_;
     next_ = (next_ + 1) % kStepWindow;
     nsteps_ = std::min(nsteps_ + 1, kStepWindow);
   }
@@ -338,7 +342,7 @@ void CertifiedPath::step_to(const Vec3d& q) {
 bool CertifiedPath::radii(double* r_max, double* r_floor) const {
   if (nsteps_ == 0) return false;
   double s = 0;
-  for (unsigned i = 0; i < nsteps_; ++i) s += steps_[i];
+  for (unsigned i = 0; i < nsteps_; ++i) s += norm(moves_[i]);
   const double step = s / double(nsteps_);
   if (!std::isfinite(step)) return false;
   *r_max = cert.rule().step_factor * step;

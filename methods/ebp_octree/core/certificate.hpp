@@ -226,7 +226,7 @@ class CertifiedPath {
 
  private:
   bool have_prev_ = false;
-  Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
+  Vec3d prev_;  ///< the last point
   double last_r_ = 0;
   /// Closes the current certificate's account: its work per query into cert_work_.
   void close_account();
@@ -240,7 +240,9 @@ class CertifiedPath {
   // the probe's searches still to come, its searches so far and their work
   unsigned certs_since_plain_ = 0, probe_left_ = 0, probe_n_ = kProbe;
   double probe_sum_ = 0;
-  double steps_[kStepWindow] = {};
+  // the last kStepWindow steps (q - q_prev), a ring; their lengths and the last one's direction
+  // are taken when a renewal asks (radii, ahead), not at every query
+  Vec3d moves_[kStepWindow];
   unsigned nsteps_ = 0, next_ = 0;
   bool sign_ok_ = false, sign_in_ = false;
   Vec3d sign_p_;
