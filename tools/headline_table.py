@@ -10,7 +10,11 @@ throughput and the ratio to Embree measured in the same run; then the structure'
 triangle, and the out-of-core rows (throughput, p99.9 latency, peak RSS). Targets beside them
 (the EBP-Octree's headline issue): distance >= 2x Embree coherent; inside haptic >= 1x Embree
 without coherence and >= 2x with; inside random >= 2x from 1M triangles; bytes <= Embree's;
-out of core >= 1 MHz, p99.9 < 1 ms, RSS < 400 MiB.
+out of core >= 1 MHz, p99.9 < 1 ms, RSS < 400 MiB. Then the contact regime (the `contact`
+kind's band and speed sweep): per model, band and speed, the coherent distance (EBP-Octree
+default and plain search, Embree coherent; >= 2x) and, where it ran, without coherence (>= 1x).
+A query set's band and speed are read from its sidecar (RESULTS/data/queries/NAME.json, or
+beside the path the result names).
 """
 import argparse
 import json
@@ -29,9 +33,31 @@ def load(out: Path):
     return rows
 
 
-def key(r):
+def query_params(out: Path, r, cache={}):
+    """The generator's parameters of the result's query set, from its sidecar ({} if none)."""
+    path = r["job"]["queries"].get("path") or ""
+    if path not in cache:
+        cache[path] = {}
+        for side in (out / "data" / "queries" / (Path(path).stem + ".json"), Path(path).with_suffix(".json")):
+            try:
+                cache[path] = json.loads(side.read_text()).get("params") or {}
+                break
+            except (OSError, ValueError):
+                continue
+    return cache[path]
+
+
+def contact_setting(out: Path, r):
+    """(band_mm, slide_speed) of a contact-path result, None for other kinds."""
+    if r["job"]["queries"]["kind"] != "contact":
+        return None
+    p = query_params(out, r)
+    return (p.get("band_mm"), p.get("slide_speed"))
+
+
+def key(r, out: Path):
     j = r["job"]
-    return (Path(j["mesh"]["path"]).stem, j["queries"]["kind"], j["query"], j["method_spec"])
+    return (Path(j["mesh"]["path"]).stem, j["queries"]["kind"], contact_setting(out, r), j["query"], j["method_spec"])
 
 
 def rate(r):
@@ -63,7 +89,7 @@ def main():
         sys.exit(f"{args.results}: no results in runs/")
     by = {}
     for r in rows:  # one result per (model, path, query, method): the most queries, then the latest run
-        k = key(r)
+        k = key(r, args.results)
         rank = (r["job"]["queries"]["n"], r["context"]["date"])
         if k not in by or rank > (by[k]["job"]["queries"]["n"], by[k]["context"]["date"]):
             by[k] = r
@@ -74,8 +100,9 @@ def main():
             models.append(m)
     models.sort(key=lambda m: next(r["job"]["mesh"]["triangles"] for r in rows if Path(r["job"]["mesh"]["path"]).stem == m))
 
-    def q(m, kind, query, spec):
-        return rate(by[(m, kind, query, spec)]) if (m, kind, query, spec) in by else None
+    def q(m, kind, query, spec, setting=None):
+        k = (m, kind, setting, query, spec)
+        return rate(by[k]) if k in by else None
 
     print("| model (triangles) | EBP haptic distance (auto) | always | plain | Embree coherent | auto / Embree (≥ 2×) "
           "| EBP inside haptic / Embree (≥ 1×) | coherent / coherent (≥ 2×) | inside random / Embree (≥ 2× from 1M) "
@@ -93,8 +120,8 @@ def main():
         ic_emb = q(m, "haptic", "inside", "embree:coherent=true")
         ir_ebp = q(m, "random", "inside", "ebp_octree")
         ir_emb = q(m, "random", "inside", "embree")
-        eb = by.get((m, "random", "inside", "ebp_octree")) or by.get((m, "haptic", "distance", "ebp_octree:coherent=true"))
-        em = by.get((m, "random", "inside", "embree")) or by.get((m, "haptic", "distance", "embree:coherent=true"))
+        eb = by.get((m, "random", None, "inside", "ebp_octree")) or by.get((m, "haptic", None, "distance", "ebp_octree:coherent=true"))
+        em = by.get((m, "random", None, "inside", "embree")) or by.get((m, "haptic", None, "distance", "embree:coherent=true"))
 
         def bpt(r):
             try:
@@ -106,21 +133,43 @@ def main():
               f"| {fmt_ratio(d_auto, d_emb, 2)} | {fmt_ratio(i_ebp, i_emb, 1)} | {fmt_ratio(ic_ebp, ic_emb, 2)} "
               f"| {fmt_ratio(ir_ebp, ir_emb, 2 if tris >= 950_000 else None)} | {bpt(eb)}, {bpt(em)} |")
 
+    settings = sorted({k[2] for k in by if k[1] == "contact" and k[2] is not None},
+                      key=lambda s: (s[0] is None, s[0] or 0, s[1] is None, s[1] or 0))
+    if settings:
+        print()
+        print("| contact: model | band ± mm | slide m/s | EBP coherent (auto) | plain | Embree coherent "
+              "| best EBP / Embree (≥ 2×) | EBP / Embree not coherent (≥ 1×) |")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|")
+        for m in models:
+            for st in settings:
+                auto = q(m, "contact", "distance", "ebp_octree:coherent=true", st)
+                plain = q(m, "contact", "distance", "ebp_octree:coherent=true,certificate=false", st)
+                emb = q(m, "contact", "distance", "embree:coherent=true", st)
+                nc_ebp = q(m, "contact", "distance", "ebp_octree", st)
+                nc_emb = q(m, "contact", "distance", "embree", st)
+                if auto is None and plain is None and emb is None and nc_ebp is None:
+                    continue
+                best = max((x for x in (auto, plain) if x is not None), default=None)
+                print(f"| {m} | {st[0]} | {st[1]} | {fmt_rate(auto)} | {fmt_rate(plain)} | {fmt_rate(emb)} "
+                      f"| {fmt_ratio(best, emb, 2)} | {fmt_ratio(nc_ebp, nc_emb, 1)} |")
+
     ooc = [r for r in rows if r["job"]["params"].get("store")]
     if ooc:
         print()
-        print("| out of core (256 MiB cache) | query | throughput (≥ 1 MHz) | p50 | p99.9 (< 1 ms) | RSS querying (< 400 MiB) |")
-        print("|---|---|---:|---:|---:|---:|")
-        for r in sorted(ooc, key=lambda r: (r["job"]["query"], str(r["job"]["params"].get("cold")))):
+        print("| out of core (256 MiB cache) | path | query | throughput (≥ 1 MHz) | p50 | p99.9 (< 1 ms) | RSS querying (< 400 MiB) |")
+        print("|---|---|---|---:|---:|---:|---:|")
+        for r in sorted(ooc, key=lambda r: (r["job"]["queries"]["kind"], r["job"]["query"], str(r["job"]["params"].get("cold")))):
             j = r["job"]
             cold = "cold" if str(j["params"].get("cold")).lower() == "true" else "warm"
+            st = contact_setting(args.results, r)
+            path = j["queries"]["kind"] + (f" ±{st[0]} mm, {st[1]} m/s" if st else "")
             if r.get("status") != "ok":
-                print(f"| {Path(j['mesh']['path']).stem}, {cold} | {j['query']} | {r.get('status')} | | | |")
+                print(f"| {Path(j['mesh']['path']).stem}, {cold} | {path} | {j['query']} | {r.get('status')} | | | |")
                 continue
             lat = r["queries"]["latency_ns"] or {}
             # The RSS while querying: the job also loads the mesh once, to check the store against it.
             rss = r.get("memory", {}).get("query_rss_bytes")
-            print(f"| {Path(j['mesh']['path']).stem}, {cold} | {j['query']} | {fmt_rate(rate(r))} "
+            print(f"| {Path(j['mesh']['path']).stem}, {cold} | {path} | {j['query']} | {fmt_rate(rate(r))} "
                   f"| {lat.get('p50', 0) / 1e3:.2f} µs | {lat.get('p999', 0) / 1e3:.1f} µs "
                   f"| {rss / 2**20:.0f} MiB |" if rss else "| — |")
 

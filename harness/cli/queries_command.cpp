@@ -28,7 +28,7 @@ void add_queries_command(CLI::App& app) {
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand("queries", "Generate a query set (NAME.npy + NAME.json)");
   cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
-  cmd->add_option("--kind", o->kind, "Query kind: random, near, haptic, surface ...");
+  cmd->add_option("--kind", o->kind, "Query kind: random, near, haptic, contact, surface ...");
   cmd->add_option("--n", o->n, "Number of points")->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "Random seed");
   cmd->add_option("--param", o->params, "Generator parameter key=value (repeatable)");

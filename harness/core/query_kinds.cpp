@@ -60,6 +60,18 @@ const std::vector<QueryKind>& query_kinds() {
         {"contact_ms", 2000},
         {"turn_rate", 1.5}},
        d::haptic_path, true},
+      {"contact",
+       "the haptic probe's contact phases alone (no approach or leave): every sample slides "
+       "inside the contact band (+-band_mm) of the surface, the near-touching regime of a "
+       "haptic loop; episodes of contact_ms start on new surface points; replayed in order",
+       {{"model_size_m", 0.3},
+        {"rate_hz", 1000},
+        {"max_speed", 0.5},
+        {"slide_speed", 0.1},
+        {"band_mm", 0.5},
+        {"contact_ms", 2000},
+        {"turn_rate", 1.5}},
+       d::contact_path, true},
       {"surface",
        "points exactly on the mesh: on vertices (share vertex_share), on edges (edge_share) "
        "and inside faces (the rest, area-weighted)",

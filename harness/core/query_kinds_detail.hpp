@@ -17,6 +17,7 @@ std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t 
 std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
+std::vector<Vec3d> contact_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 
 /// Area-weighted triangle picking: a prefix sum of triangle areas (#F doubles), searched by
 /// bisection. Zero-area triangles are never picked.
@@ -70,7 +71,8 @@ class TriangleGrid {
 
 /// The fixed layout of a haptic path: every episode has `approach` samples coming in from free
 /// space, `contact` samples in the contact band, and `leave` samples going away. Episode e
-/// covers samples [e * total(), (e + 1) * total()); the last one may be cut short by n.
+/// covers samples [e * total(), (e + 1) * total()); the last one may be cut short by n. For the
+/// `contact` kind (approach_and_leave false) approach and leave are 0 and approach_distance too.
 struct HapticLayout {
   std::size_t approach = 0, contact = 0, leave = 0;
   std::size_t total() const { return approach + contact + leave; }
@@ -79,6 +81,7 @@ struct HapticLayout {
   double band = 0;             ///< contact band half-width, mesh units
   double approach_distance = 0;  ///< start distance from the surface, mesh units
 };
-HapticLayout haptic_layout(const Mesh& mesh, const Params& p);
+/// Throws InputError (naming the kind and parameter) for a parameter out of range.
+HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_leave = true);
 
 }  // namespace bvhbench::query_kinds_detail

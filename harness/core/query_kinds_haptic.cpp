@@ -1,5 +1,6 @@
 // The `haptic` query kind: a simulated 1 kHz haptic probe (the workload the EBP-Octree paper
-// targets), and the triangle grid it uses to follow the surface.
+// targets), its contact-only variant `contact`, and the triangle grid they use to follow the
+// surface.
 //
 // The path is a sequence of contact episodes of fixed length (haptic_layout). In each:
 //  - approach: from free space (approach_mm off the surface, behind the first contact point)
@@ -13,6 +14,9 @@
 //    never longer than max_speed / rate_hz (where the closest point jumps, across a concave
 //    crease or a thin part, the probe is held to that step and catches up);
 //  - leave: away along the last outward direction, velocity continuous, back to free space.
+// The `contact` kind is the same path without the approach and leave phases: every sample is in
+// the band (the regime a device pressed on the surface lives in), episodes start on a new
+// surface point. Its random draws are the haptic path's, so the two share their contact phases.
 // Scale: the mesh's bounding-box diagonal is taken as model_size_m metres (30 cm by default),
 // so a hand at 0.5 m/s moves at most 0.5 / 0.3 / 1000 = 0.17% of the diagonal per sample.
 //
@@ -194,19 +198,17 @@ bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
 // the haptic path
 // ---------------------------------------------------------------------------------------------
 
-HapticLayout haptic_layout(const Mesh& mesh, const Params& p) {
+HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_leave) {
+  const std::string kind = approach_and_leave ? "haptic" : "contact";
   auto get = [&](const char* key) {
     const double v = p.at(key);
     if (!(v > 0) || !std::isfinite(v))
-      throw InputError(std::string("query kind 'haptic': parameter ") + key + " must be > 0");
+      throw InputError("query kind '" + kind + "': parameter " + key + " must be > 0");
     return v;
   };
   const double model = get("model_size_m"), rate = get("rate_hz"), vmax = get("max_speed");
-  const double slide = get("slide_speed"), vapp = get("approach_speed");
-  const double d0_mm = get("approach_mm"), band_mm = get("band_mm"), contact_ms = get("contact_ms");
-  if (!(p.at("turn_rate") >= 0)) throw InputError("query kind 'haptic': turn_rate must be >= 0");
-  if (slide + vapp > vmax)
-    throw InputError("query kind 'haptic': slide_speed + approach_speed must not exceed max_speed");
+  const double slide = get("slide_speed"), band_mm = get("band_mm"), contact_ms = get("contact_ms");
+  if (!(p.at("turn_rate") >= 0)) throw InputError("query kind '" + kind + "': turn_rate must be >= 0");
   const double diag = mesh.bounds().diagonal();
   if (!(diag > 0) || !std::isfinite(diag))
     throw InputError(mesh.path + ": the mesh has no extent to move a probe over");
@@ -214,18 +216,30 @@ HapticLayout haptic_layout(const Mesh& mesh, const Params& p) {
   L.units_per_metre = diag / model;
   L.max_step = vmax / rate * L.units_per_metre;
   L.band = band_mm * 1e-3 * L.units_per_metre;
+  L.contact = std::max<std::size_t>(2, std::size_t(std::llround(contact_ms * 1e-3 * rate)));
+  if (!approach_and_leave) {
+    // Contact only: the probe never leaves the band, so sliding alone must respect max_speed.
+    if (slide > vmax) throw InputError("query kind 'contact': slide_speed must not exceed max_speed");
+    return L;
+  }
+  const double vapp = get("approach_speed"), d0_mm = get("approach_mm");
+  if (slide + vapp > vmax)
+    throw InputError("query kind 'haptic': slide_speed + approach_speed must not exceed max_speed");
   L.approach_distance = d0_mm * 1e-3 * L.units_per_metre;
   // Smoothstep's peak rate is 1.5 / T: T = 1.5 d0 / approach_speed keeps the normal speed
   // below approach_speed.
   const double t_app = 1.5 * d0_mm * 1e-3 / vapp;
   L.approach = L.leave = std::max<std::size_t>(1, std::size_t(std::ceil(t_app * rate)));
-  L.contact = std::max<std::size_t>(2, std::size_t(std::llround(contact_ms * 1e-3 * rate)));
   return L;
 }
 
-std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed,
-                               const Params& params) {
-  const HapticLayout L = haptic_layout(mesh, params);
+namespace {
+
+// Both kinds' paths: with approach_and_leave false the episodes are their contact phase alone
+// (the random draws are the same, so the haptic path's bytes do not depend on this option).
+std::vector<Vec3d> probe_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params,
+                              bool approach_and_leave) {
+  const HapticLayout L = haptic_layout(mesh, params, approach_and_leave);
   const double rate = params.at("rate_hz"), dt = 1.0 / rate;
   const double slide = params.at("slide_speed") * L.units_per_metre;  // units / s
   const double turn_rate = params.at("turn_rate");
@@ -238,7 +252,7 @@ std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t se
   Rng rng(seed);
   std::vector<Vec3d> out;
   out.reserve(n);
-  const double T = double(L.approach) * dt;  // approach and leave duration
+  const double T = double(L.approach) * dt;  // approach and leave duration (0: contact only)
   const double tiny = mesh.bounds().diagonal() * 1e-12;
 
   while (out.size() < n) {
@@ -322,6 +336,16 @@ std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t se
   }
   progress.finish();
   return out;
+}
+
+}  // namespace
+
+std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+  return probe_path(mesh, n, seed, params, true);
+}
+
+std::vector<Vec3d> contact_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+  return probe_path(mesh, n, seed, params, false);
 }
 
 }  // namespace bvhbench::query_kinds_detail

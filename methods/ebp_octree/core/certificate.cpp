@@ -239,7 +239,13 @@ CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
 }
 
 Vec3d CertifiedPath::ahead(const Vec3d& q) const {
-  const Vec3d c = q + dir_ * (cert.rule().ahead * last_r_);
+  Vec3d dir(0, 0, 0);  // the last step's direction (unit, or zero)
+  if (nsteps_ > 0) {
+    const Vec3d& m = moves_[(next_ + kStepWindow - 1) % kStepWindow];
+    const double len = norm(m);
+    if (len > 0) dir = m / len;
+  }
+  const Vec3d c = q + dir * (cert.rule().ahead * last_r_);
   return std::isfinite(c.x + c.y + c.z) ? c : q;
 }
 
@@ -264,12 +270,27 @@ bool CertifiedPath::prefer_plain() {
     if (--plain_left_ == 0) trial_ = true;
     return true;
   }
+  if (probe_left_ > 0) {
+    --probe_left_;
+    return true;
+  }
   if (trial_) {  // after a streak: one certificate, whose cost replaces the estimate
     trial_ = false;
     fresh_ = true;
     return false;
   }
-  if (cert_work_ >= 0 && plain_work_ >= 0 && cert_work_ > plain_work_) {
+  if (cert_work_ >= 0 && (plain_work_ < 0 || certs_since_plain_ >= kProbeEvery)) {
+    // the plain estimate is missing or old: measure it (this query is the probe's first)
+    cert.clear();
+    probe_left_ = kProbe - 1;
+    probe_n_ = 0;
+    probe_sum_ = 0;
+    certs_since_plain_ = 0;
+    return true;
+  }
+  // A margin (kPlainMargin): the estimates are averages of noisy samples, and on the small models
+  // certificates that were about as dear as plain searches still won over the next stretch.
+  if (cert_work_ >= 0 && plain_work_ >= 0 && cert_work_ > kPlainMargin * plain_work_) {
     cert.clear();
     plain_left_ = streak_ - 1;  // this query is the streak's first
     if (plain_left_ == 0) trial_ = true;
@@ -280,9 +301,19 @@ bool CertifiedPath::prefer_plain() {
   return false;
 }
 
+void CertifiedPath::plain_answered(double work) {
+  certs_since_plain_ = 0;
+  if (probe_n_ < kProbe) {  // a probe's search: the estimate is its mean
+    probe_sum_ += work;
+    ++probe_n_;
+    plain_work_ = probe_sum_ / double(probe_n_);
+    return;
+  }
+  plain_work_ = plain_work_ < 0 ? work : plain_work_ + (work - plain_work_) / 8;
+}
+
 void CertifiedPath::reset() {
   have_prev_ = false;
-  dir_ = Vec3d(0, 0, 0);
   last_r_ = 0;
   plain_work_ = cert_work_ = -1;
   account_work_ = 0;
@@ -290,6 +321,9 @@ void CertifiedPath::reset() {
   account_open_ = trial_ = fresh_ = false;
   plain_left_ = 0;
   streak_ = kPlainStreakMin;
+  certs_since_plain_ = probe_left_ = 0;
+  probe_n_ = kProbe;
+  probe_sum_ = 0;
   nsteps_ = next_ = 0;
   sign_ok_ = false;
   cert.clear();
@@ -297,8 +331,7 @@ void CertifiedPath::reset() {
 
 void CertifiedPath::step_to(const Vec3d& q) {
   if (have_prev_) {
-    steps_[next_] = norm(q - prev_);
-    dir_ = steps_[next_] > 0 ? (q - prev_) / steps_[next_] : Vec3d(0, 0, 0);
+    moves_[next_] = q - prev_;
     next_ = (next_ + 1) % kStepWindow;
     nsteps_ = std::min(nsteps_ + 1, kStepWindow);
   }
@@ -309,7 +342,7 @@ void CertifiedPath::step_to(const Vec3d& q) {
 bool CertifiedPath::radii(double* r_max, double* r_floor) const {
   if (nsteps_ == 0) return false;
   double s = 0;
-  for (unsigned i = 0; i < nsteps_; ++i) s += steps_[i];
+  for (unsigned i = 0; i < nsteps_; ++i) s += norm(moves_[i]);
   const double step = s / double(nsteps_);
   if (!std::isfinite(step)) return false;
   *r_max = cert.rule().step_factor * step;

@@ -64,6 +64,16 @@ inline double collection_work(std::uint32_t offered, std::uint32_t kept) { retur
 /// Plain searches in a row when certificates cost more per query than plain searches: the
 /// first streak, and the longest (each losing trial doubles it; a winning one resets it).
 inline constexpr unsigned kPlainStreakMin = 16, kPlainStreakMax = 1024;
+/// The plain search's estimate is measured, not remembered: after kProbeEvery certificates in a
+/// row with no plain search between them (and before the first comparison), the next kProbe
+/// queries that leave a ball are plain searches whose mean replaces the estimate. Without it the
+/// estimate was the path's first search (a descent from the root, ~3x a coherent one on the 1M
+/// bunny), so certificates that cost twice a coherent search looked cheaper than it.
+inline constexpr unsigned kProbeEvery = 16, kProbe = 4;
+/// Plain streaks start when certificates cost more than kPlainMargin x a plain search per query
+/// (callgrind, auto, instructions per query, margin 1 / 1.25 / 1.5: cow haptic 2,277 / 2,206 /
+/// 2,202, rocker-arm haptic 2,913 / 2,796 / 2,804, 1M bunny contact 5,406 / 5,425 / 5,460).
+inline constexpr double kPlainMargin = 1.25;
 
 /// The rule's constants (a struct so that a measurement can vary them in one place).
 struct CertificateRule {
@@ -184,14 +194,15 @@ class CertifiedPath {
   void renewed() {
     last_r_ = cert.r();
     account_open_ = true;
+    ++certs_since_plain_;
   }
   /// The work of one query the current certificate answered (its renewal's included).
   void certificate_answered(double work) {
     account_work_ += work;
     ++account_queries_;
   }
-  /// The work of one plain search.
-  void plain_answered(double work) { plain_work_ = plain_work_ < 0 ? work : plain_work_ + (work - plain_work_) / 8; }
+  /// The work of one plain search (a probe's mean replaces the estimate; others move it by 1/8).
+  void plain_answered(double work);
   /// When p has left the certificate's ball: whether to answer it by a plain search instead of a
   /// renewal. Certificates lose where the probe leaves each ball within a few queries (a
   /// jittery walk; triangles a few steps wide, whose renewal costs several searches): while
@@ -215,7 +226,7 @@ class CertifiedPath {
 
  private:
   bool have_prev_ = false;
-  Vec3d prev_, dir_;  ///< the last point, the last step's direction (unit, or zero)
+  Vec3d prev_;  ///< the last point
   double last_r_ = 0;
   /// Closes the current certificate's account: its work per query into cert_work_.
   void close_account();
@@ -225,7 +236,13 @@ class CertifiedPath {
   unsigned account_queries_ = 0;
   bool account_open_ = false, trial_ = false, fresh_ = false, adaptive_ = true;
   unsigned plain_left_ = 0, streak_ = kPlainStreakMin;
-  double steps_[kStepWindow] = {};
+  // the plain estimate's probe (kProbeEvery, kProbe): certificates since the last plain search,
+  // the probe's searches still to come, its searches so far and their work
+  unsigned certs_since_plain_ = 0, probe_left_ = 0, probe_n_ = kProbe;
+  double probe_sum_ = 0;
+  // the last kStepWindow steps (q - q_prev), a ring; their lengths and the last one's direction
+  // are taken when a renewal asks (radii, ahead), not at every query
+  Vec3d moves_[kStepWindow];
   unsigned nsteps_ = 0, next_ = 0;
   bool sign_ok_ = false, sign_in_ = false;
   Vec3d sign_p_;
@@ -280,8 +297,10 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, const Vec3d&
     }
     renewal_answered();
   } else {
+    // The path's first point: a descent from the root, not what a plain search costs on the
+    // path, so it is not in the estimate.
     path.cert.clear();
-    return searched();
+    return plain();
   }
   *site = h.site;
   DistanceAnswer r;

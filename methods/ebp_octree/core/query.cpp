@@ -38,6 +38,7 @@ void Query::reset_path() {
   last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
   near_.valid = false;
+  walk_.root = UINT32_MAX;  // a new path walks from the root again: each pass counts the same work
 }
 
 }  // namespace ebp

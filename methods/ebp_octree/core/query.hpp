@@ -125,6 +125,18 @@ class Query {
   std::uint32_t last_tri_ = UINT32_MAX;  // LeafTri index of the previous closest triangle
   std::uint32_t last_leaf_ = UINT32_MAX;  // and the leaf where it was found
   std::uint32_t last_leaf_node_ = UINT32_MAX;  // and that leaf's node
+  // distance: the last narrowed start's walk (query_distance.cpp): from the subtree root `root`,
+  // the node and cell corner at each level below it, so that the next search of a coherent path
+  // resumes from the deepest of those cells that holds its ball instead of walking down from the
+  // root again. A cache of the tree's own nodes: any node whose cell holds the ball is a valid
+  // start, so answers do not depend on it.
+  struct Walk {
+    std::uint32_t root = UINT32_MAX;
+    int len = 0;
+    std::uint32_t node[kMaxLevel + 2];
+    Vec3d lo[kMaxLevel + 2];
+  };
+  Walk walk_;
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;

@@ -1,4 +1,4 @@
-"""`bvhbench queries` for the four kinds on meshes made by datasets-scripts: shape and sidecar,
+"""`bvhbench queries` for the five kinds on meshes made by datasets-scripts: shape and sidecar,
 same bytes for the same seed, the property of each kind, and the empty mesh rejected (exit 2)."""
 import json
 import os
@@ -13,7 +13,7 @@ sys.path.insert(0, str(ROOT / "datasets-scripts"))
 from bvhdata.families import Context, FAMILIES  # noqa: E402
 from bvhdata.ply import write_ply  # noqa: E402
 
-KINDS = ["random", "near", "haptic", "surface"]
+KINDS = ["random", "near", "haptic", "contact", "surface"]
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_kind_writes_points_and_sidecar_deterministically(bvhbench, torus_ply, t
     assert not np.array_equal(a, c)
     assert meta["kind"] == kind and meta["n"] == 3000 and meta["seed"] == 5
     assert meta["mesh_sha256"] and isinstance(meta["params"], dict) and meta["params"]
-    assert meta["ordered"] == (kind == "haptic")
+    assert meta["ordered"] == (kind in ("haptic", "contact"))
 
 
 def test_random_in_enlarged_box(bvhbench, torus_ply, tmp_path):
@@ -84,6 +84,46 @@ def test_haptic_steps_small_inside_episodes(bvhbench, torus_ply, tmp_path):
     # Episodes: 150 + 2000 + 150 samples with the defaults; the only big steps are between them.
     big = np.flatnonzero(steps > max_step * (1 + 1e-9)) + 1
     assert np.all(big % 2300 == 0)
+
+
+def test_contact_path_stays_in_its_band_and_records_it(bvhbench, torus_ply, tmp_path):
+    # The contact kind: every sample within +-band_mm of the mesh (libigl's exact distances),
+    # the band and speed in the sidecar, the same bytes for the same seed and parameters.
+    import igl
+
+    mesh, g = torus_ply
+    V, F = np.asarray(g.vertices, dtype=np.float64), np.asarray(g.faces, dtype=np.int64)
+    diag = np.linalg.norm(V.max(0) - V.min(0))
+    for band_mm, speed in [(0.05, 0.1), (0.5, 0.3)]:
+        args = (f"band_mm={band_mm}", f"slide_speed={speed}", "contact_ms=1000")
+        pts, meta = make(bvhbench, mesh, "contact", tmp_path / "c.npy", 3000, 2, *args)
+        _, _ = make(bvhbench, mesh, "contact", tmp_path / "d.npy", 3000, 2, *args)
+        assert (tmp_path / "c.npy").read_bytes() == (tmp_path / "d.npy").read_bytes()
+        p = meta["params"]
+        assert meta["kind"] == "contact" and p["band_mm"] == band_mm and p["slide_speed"] == speed
+        assert "approach_mm" not in p
+        band = band_mm * 1e-3 * diag / p["model_size_m"]
+        d2, tri, closest = igl.point_mesh_squared_distance(pts, V, F)
+        assert np.all(np.sqrt(d2) <= band * (1 + 1e-9))
+        # Slightly outside and slightly penetrating (the side of the closest triangle), both.
+        n = np.cross(V[F[tri, 1]] - V[F[tri, 0]], V[F[tri, 2]] - V[F[tri, 0]])
+        inside = np.mean(np.einsum("ij,ij->i", pts - closest, n) < 0)
+        assert 0.2 < inside < 0.8
+        # No approach or leave: the only big steps are the jumps between 1000-sample episodes.
+        max_step = p["max_speed"] / p["rate_hz"] * diag / p["model_size_m"]
+        steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        assert np.all((np.flatnonzero(steps > max_step * (1 + 1e-9)) + 1) % 1000 == 0)
+
+
+@pytest.mark.parametrize("param", ["band_mm=0", "band_mm=-0.2", "slide_speed=0", "slide_speed=0.9",
+                                   "contact_ms=-5", "turn_rate=-1", "approach_mm=20", "band_mm=nan"])
+def test_contact_bad_parameter_exits_2(bvhbench, torus_ply, tmp_path, param):
+    mesh, _ = torus_ply
+    r = run(bvhbench, "queries", "--mesh", mesh, "--kind", "contact", "--n", 10, "--out",
+            tmp_path / "q.npy", "--param", param)
+    assert r.returncode == 2, r.stderr
+    assert param.split("=")[0] in r.stderr
+    assert not os.path.exists(tmp_path / "q.npy")
 
 
 def test_empty_mesh_is_rejected(bvhbench, tmp_path):

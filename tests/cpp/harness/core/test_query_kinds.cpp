@@ -24,8 +24,11 @@
 using namespace bvhbench;
 using namespace bvhbench::test;
 namespace qd = bvhbench::query_kinds_detail;
+using KindParams = qd::Params;
 
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 /// The unit square in z = 0 (normal +z), two triangles.
 Mesh square() {
@@ -61,9 +64,11 @@ bool same_bytes(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
 
 }  // namespace
 
-TEST(QueryKinds, AllFourAreRegistered) {
-  for (const char* k : {"random", "near", "haptic", "surface"}) EXPECT_NE(find_query_kind(k), nullptr) << k;
+TEST(QueryKinds, AllFiveAreRegistered) {
+  for (const char* k : {"random", "near", "haptic", "contact", "surface"})
+    EXPECT_NE(find_query_kind(k), nullptr) << k;
   EXPECT_TRUE(find_query_kind("haptic")->ordered);
+  EXPECT_TRUE(find_query_kind("contact")->ordered);
   EXPECT_FALSE(find_query_kind("random")->ordered);
 }
 
@@ -200,6 +205,71 @@ TEST(QueryKinds, HapticHasNoJumpsInsideEpisodesAndStaysInTheContactBand) {
   // Slightly outside and slightly penetrating, both.
   EXPECT_GT(double(penetrating) / contact, 0.2);
   EXPECT_LT(double(penetrating) / contact, 0.8);
+}
+
+TEST(QueryKinds, ContactIsTheHapticPathsContactPhasesAlone) {
+  // Same seed and parameters: the contact path is the haptic path with its approach and leave
+  // samples taken out, bit for bit (the same random draws), so the `contact` kind measures the
+  // very samples the `haptic` kind spends in the band.
+  const Mesh m = octasphere(3);
+  const KindParams band = {{"band_mm", 0.2}, {"slide_speed", 0.3}, {"contact_ms", 300}};
+  KindParams hp = band;
+  const QueryKind* h = find_query_kind("haptic");
+  for (auto& [k, v] : h->defaults) hp.emplace(k, v);
+  const qd::HapticLayout L = qd::haptic_layout(m, hp);
+  const std::size_t episodes = 3;
+  auto haptic = generate_queries(m, "haptic", episodes * L.total(), 11, band, nullptr);
+  auto contact = generate_queries(m, "contact", episodes * L.contact, 11, band, nullptr);
+  std::vector<Vec3d> phases;
+  for (std::size_t e = 0; e < episodes; ++e)
+    for (std::size_t j = L.approach; j < L.approach + L.contact; ++j) phases.push_back(haptic[e * L.total() + j]);
+  EXPECT_TRUE(same_bytes(contact, phases));
+}
+
+TEST(QueryKinds, ContactStaysInItsBandAtEveryBandAndSpeed) {
+  const Mesh m = octasphere(4);
+  for (double band_mm : {0.05, 0.2, 0.5})
+    for (double speed : {0.05, 0.3}) {
+      const KindParams given = {{"band_mm", band_mm}, {"slide_speed", speed}, {"contact_ms", 500}};
+      KindParams all = given;
+      for (auto& [k, v] : find_query_kind("contact")->defaults) all.emplace(k, v);
+      const qd::HapticLayout L = qd::haptic_layout(m, all, false);
+      ASSERT_EQ(L.approach, 0u);
+      ASSERT_EQ(L.leave, 0u);
+      ASSERT_EQ(L.contact, 500u);
+      const std::size_t n = 3 * L.contact;
+      nlohmann::json meta;
+      auto pts = generate_queries(m, "contact", n, 5, given, &meta);
+      ASSERT_EQ(pts.size(), n);
+      EXPECT_EQ(meta["params"]["band_mm"], band_mm);
+      EXPECT_EQ(meta["params"]["slide_speed"], speed);
+      EXPECT_TRUE(meta["ordered"].get<bool>());
+      std::size_t penetrating = 0;
+      double largest_step = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Closest c = brute_closest(m, pts[i]);
+        // Every sample, not most: on a smooth convex model nothing holds the probe back.
+        ASSERT_LE(c.distance, L.band * (1 + 1e-9)) << band_mm << " " << speed << " sample " << i;
+        penetrating += c.inside;
+        if (i % L.contact) largest_step = std::max(largest_step, norm(pts[i] - pts[i - 1]));
+      }
+      EXPECT_GT(double(penetrating) / n, 0.2) << band_mm << " " << speed;
+      EXPECT_LT(double(penetrating) / n, 0.8) << band_mm << " " << speed;
+      // Slides at most slide_speed (plus the band offset's own motion), never beyond max_speed.
+      EXPECT_LE(largest_step, L.max_step * (1 + 1e-9));
+      EXPECT_LE(largest_step, (speed / 1000 + 2 * kPi * 4 * band_mm * 1e-3 / 1000) * L.units_per_metre * 1.01);
+    }
+}
+
+TEST(QueryKinds, ContactRejectsBadParameters) {
+  const Mesh m = octasphere(2);
+  for (const char* key : {"band_mm", "slide_speed", "contact_ms", "rate_hz", "model_size_m", "max_speed"})
+    for (double v : {0.0, -1.0}) EXPECT_THROW(generate_queries(m, "contact", 10, 1, {{key, v}}, nullptr), InputError) << key;
+  EXPECT_THROW(generate_queries(m, "contact", 10, 1, {{"turn_rate", -1}}, nullptr), InputError);
+  EXPECT_THROW(generate_queries(m, "contact", 10, 1, {{"slide_speed", 0.6}}, nullptr), InputError);  // > max_speed
+  // The approach is the haptic kind's: the contact kind has no such parameter.
+  EXPECT_THROW(generate_queries(m, "contact", 10, 1, {{"approach_mm", 5}}, nullptr), InputError);
+  EXPECT_NO_THROW(generate_queries(m, "contact", 10, 1, {{"slide_speed", 0.5}}, nullptr));
 }
 
 TEST(QueryKinds, HapticFollowsTheSurfaceOfANonConvexModel) {

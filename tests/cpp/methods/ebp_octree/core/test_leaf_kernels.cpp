@@ -262,6 +262,31 @@ TEST(EbpLeafKernels, DistancePrefilterClearsOnlyTrianglesFartherThanTheBest) {
 // Inside answers and every counter are the same with either kernel, coherent or not, on closed
 // meshes, an open one, and stress-style meshes (duplicated faces, zero-area faces, nested shells
 // of both orientations); off the surface the answers are the oracle's on the closed ones.
+TEST(EbpLeafKernels, FloatBoundsAreTheNearestFloatsOutwards) {
+  // float_bounds steps on the float's bits: the same as std::nextafter towards -+infinity where
+  // rounding went the other way, at zero, subnormals, the largest finite float and beyond.
+  const float fmax = std::numeric_limits<float>::max(), tiny = std::numeric_limits<float>::denorm_min();
+  std::vector<double> xs = {0.0, -0.0, 1e-300, -1e-300, 1e-45, -1e-45, double(tiny), 0.1, -0.1, 1.0 / 3,
+                            -1.0 / 3, 1e30, -1e30, double(fmax), double(fmax) * (1 + 1e-12), -double(fmax) * 1.5,
+                            1e300, -1e300, std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity()};
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 2000; ++i) xs.push_back(u(rng) * std::pow(10.0, int(rng() % 80) - 40));
+  const float inf = std::numeric_limits<float>::infinity();
+  for (double x : xs) {
+    float lo, hi;
+    float_bounds(x, &lo, &hi);
+    const float f = float(x);
+    const float want_lo = double(f) > x ? std::nextafter(f, -inf) : f;
+    const float want_hi = double(f) < x ? std::nextafter(f, inf) : f;
+    EXPECT_EQ(std::memcmp(&lo, &want_lo, 4), 0) << x;
+    EXPECT_EQ(std::memcmp(&hi, &want_hi, 4), 0) << x;
+    EXPECT_LE(double(lo), x);
+    EXPECT_GE(double(hi), x);
+  }
+}
+
 TEST(EbpLeafKernels, InsideIsTheSameWithEitherKernel) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   for (const char* name : {"cow.obj", "fandisk.obj", "rocker-arm.obj", "spot.obj"})
