@@ -14,6 +14,7 @@ Exit codes: 0 report written; 1 some chart failed to draw (report written withou
 2 bad usage or no results to report on.
 """
 import argparse
+import re
 import os
 import sys
 import traceback
@@ -182,10 +183,29 @@ def build_paper(rs, out):
     return md
 
 
+def history_section(history, out):
+    """The history's section (tools/bench_history.py draws it into OUT/history/), its links
+    relative to the report; None when the folder holds no history."""
+    import importlib.util
+    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "bench_history.py")
+    spec = importlib.util.spec_from_file_location("bench_history", tool)
+    bench_history = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench_history)
+    if bench_history.report(history, os.path.join(out, "history")) != 0:
+        return None
+    with open(os.path.join(out, "history", "history.md"), encoding="utf-8") as f:
+        text = f.read()
+    return re.sub(r"\]\((?!https?:)([^)]+)\)", r"](history/\1)", text)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Charts and tables from a bvhbench result set.")
     ap.add_argument("results", help="result directory, e.g. results/default")
     ap.add_argument("--out", help="output directory (default: RESULTS/report)")
+    ap.add_argument("--history", metavar="DIR",
+                    help="a history of results across commits (tools/bench_history.py, e.g. "
+                         "results/history): each job's rate and instructions per query per commit, "
+                         "with the steps found, become the report's last section")
     ap.add_argument("--strict", action="store_true",
                     help="let a chart's exception propagate (for debugging and tests)")
     args = ap.parse_args(argv)
@@ -202,6 +222,12 @@ def main(argv=None):
     if rs.is_stability_suite():
         stability.write(rs, out, "stability.csv", "stability.md")
     md = build_markdown(rs, drawn, paper_md)
+    if args.history:
+        section = history_section(args.history, out)
+        if section is None:
+            print(f"report: no history under {args.history}", file=sys.stderr)
+            return 2
+        md = md.rstrip("\n") + "\n\n" + section
     write_atomic(os.path.join(out, "report.md"), md)
     write_atomic(os.path.join(out, "report.html"),
                  html_report.render(md, out, f"bvhbench report: {rs.name}"))

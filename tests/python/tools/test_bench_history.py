@@ -40,3 +40,30 @@ def test_report_draws_and_names_the_step(tmp_path):
     assert "| steady | 12 | 500 | none |" in md
     assert (tmp_path / "out" / "abc123" / "overview.instructions_per_query.png").stat().st_size > 1000
     assert (tmp_path / "out" / "abc123" / "moved.instructions_per_query.png").exists()
+
+
+def test_the_report_ends_with_the_history(tmp_path):
+    # plots/report.py --history: the same section, its charts linked from the report's folder.
+    import shutil
+    import subprocess
+    import sys
+    hist = tmp_path / "history" / "abc123"
+    hist.mkdir(parents=True)
+    lines = [{"commit": (f"{i:x}" * 40)[:40], "dirty": False, "date": "", "job": "moved",
+              "instructions_per_query": 1000.0 * (1.3 if i >= 5 else 1.0)} for i in range(10)]
+    (hist / "instructions.jsonl").write_text("".join(json.dumps(l) + "\n" for l in lines))
+    results = tmp_path / "results"
+    shutil.copytree(ROOT / "tests" / "fixtures" / "results_small", results)
+    r = subprocess.run([sys.executable, str(ROOT / "plots" / "report.py"), str(results),
+                        "--history", str(tmp_path / "history")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    md = (results / "report" / "report.md").read_text()
+    assert "## History across commits" in md
+    assert "5555555555: 1,000 -> 1,300 (+30.0%)" in md
+    assert "](history/abc123/overview.instructions_per_query.png)" in md
+    assert (results / "report" / "history" / "abc123" / "overview.instructions_per_query.png").exists()
+    html = (results / "report" / "report.html").read_text()
+    assert "History across commits" in html
+    r = subprocess.run([sys.executable, str(ROOT / "plots" / "report.py"), str(results),
+                        "--history", str(tmp_path / "nothing")], capture_output=True, text=True)
+    assert r.returncode == 2 and "no history" in r.stderr
