@@ -14,6 +14,16 @@ def _exe():
     return Path(env) if env else ROOT / "build" / "bvhbench"
 
 
+EXE = _exe()
+COW = SHARED_MESHES / "cow.obj"
+# The module marks (`pytestmark = NEEDS_RUNNER_AND_COW`) of the tests that drive the built runner on
+# the shared cow.obj: skipped, saying which is missing, where either is.
+NEEDS_RUNNER_AND_COW = [
+    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
+    pytest.mark.skipif(not COW.exists(), reason=f"test mesh {COW} not found"),
+]
+
+
 @pytest.fixture(scope="session")
 def bvhbench():
     """Path of the built runner; tests that need it are skipped when it was not built."""

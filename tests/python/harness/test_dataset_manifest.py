@@ -8,22 +8,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import shutil
 import subprocess
-from pathlib import Path
 
-import pytest
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW
 
-from conftest import ROOT
-
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
-
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+MESH = COW
+pytestmark = NEEDS_RUNNER_AND_COW
 
 
 def job(tmp_path, mesh):

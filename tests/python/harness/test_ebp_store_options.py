@@ -8,21 +8,14 @@ The binary: $BVHBENCH_EXE, else build/bvhbench; skipped if missing.
 from __future__ import annotations
 
 import json
-import os
 import subprocess
-from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW
 
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
-
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+MESH = COW
+pytestmark = NEEDS_RUNNER_AND_COW
 
 
 def run(*args, check=None):

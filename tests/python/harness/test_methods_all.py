@@ -19,16 +19,12 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW, ROOT
 
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
+MESH = COW
 REPORT = ROOT / "plots" / "report.py"
 
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+pytestmark = NEEDS_RUNNER_AND_COW
 
 # A toy method that declares its own default sweep: two radii, one of them in batches.
 TOY = '''

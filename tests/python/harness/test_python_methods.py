@@ -20,20 +20,15 @@ import json
 import os
 import subprocess
 import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW
 
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
+MESH = COW
 
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+pytestmark = NEEDS_RUNNER_AND_COW
 
 # A toy method: the distance to the nearest *vertex* (numpy, every vertex per point) and inside
 # when that vertex's... no: inside is "closer to the centroid than the mean vertex is", a rule

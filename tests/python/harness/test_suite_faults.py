@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -21,14 +20,9 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
-
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW
+MESH = COW
+pytestmark = NEEDS_RUNNER_AND_COW
 
 
 def write_suite(path: Path, methods, timeout_s=10, memory_limit_mb=2048, truth=True, n=200, query="[inside]"):

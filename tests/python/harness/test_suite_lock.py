@@ -11,24 +11,16 @@ The binary: $BVHBENCH_EXE, else build/bvhbench; skipped if missing.
 from __future__ import annotations
 
 import json
-import os
 import signal
 import socket
 import subprocess
 import time
 from pathlib import Path
 
-import pytest
+from conftest import COW, EXE, NEEDS_RUNNER_AND_COW
 
-from conftest import ROOT
-
-EXE = Path(os.environ.get("BVHBENCH_EXE", ROOT / "build" / "bvhbench"))
-MESH = ROOT.parent / "shared" / "meshes" / "cow.obj"
-
-pytestmark = [
-    pytest.mark.skipif(not EXE.exists(), reason=f"bvhbench binary not found at {EXE} (set BVHBENCH_EXE)"),
-    pytest.mark.skipif(not MESH.exists(), reason=f"test mesh {MESH} not found"),
-]
+MESH = COW
+pytestmark = NEEDS_RUNNER_AND_COW
 
 
 def write_suite(path: Path, methods, timeout_s=60):
