@@ -35,7 +35,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 inline double max_abs(const Vec3d& v) { return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}); }
 
 /// A float >= x (x >= 0): rounding to float loses less than 1e-6 of x.
-inline float float_up(double x) { return float(x * (1 + 1e-6)); }
+inline float float_above(double x) { return float(x * (1 + 1e-6)); }
 
 inline Vec3d rounded(const Vec3d& v) { return {double(float(v.x)), double(float(v.y)), double(float(v.z))}; }
 }  // namespace
@@ -193,8 +193,8 @@ void DistanceCertificate::pack(double r) {
     // The double evaluation of the deviations (1e-12 of the magnitudes) and the float
     // evaluation at q (1e-6 (r + |offset|)), rounded up to float.
     const double guard = 1e-12 * (vmax + std::fabs(d) + fmax);
-    lane[16 * kScanLanes] = float_up(eh + guard + 1e-6 * (r + std::fabs(d)));
-    lane[17 * kScanLanes] = float_up(so + guard + 1e-6 * (r + fmax));
+    lane[16 * kScanLanes] = float_above(eh + guard + 1e-6 * (r + std::fabs(d)));
+    lane[17 * kScanLanes] = float_above(so + guard + 1e-6 * (r + fmax));
   }
 }
 
@@ -219,7 +219,7 @@ CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
     const Vec3d ql = q - centre_;
     const float qf[3] = {float(ql.x), float(ql.y), float(ql.z)};
     const std::uint32_t blocks = std::uint32_t(masks_.size());
-    scan_lower_bounds(kernel_, pack_.data(), blocks, qf, float_up(u * u), masks_.data());
+    scan_lower_bounds(kernel_, pack_.data(), blocks, qf, float_above(u * u), masks_.data());
     c.planes_tested += n;
     for (std::uint32_t j = 0; j < blocks; ++j)
       for (unsigned bits = masks_[j]; bits; bits &= bits - 1) {

@@ -379,27 +379,6 @@ LeafKernels set_leaf_kernels(LeafKernels k) {
 
 const LeafKernelTable& leaf_kernel_table() { return current(); }
 
-namespace {
-// std::nextafter(f, +-infinity) for a float that is not NaN, on its bits (the libm call was ~60
-// instructions a bound, and the distance search takes several per leaf it scans).
-float float_up(float f) {
-  if (f == 0) return std::numeric_limits<float>::denorm_min();
-  if (f == kInf) return f;
-  std::uint32_t u;
-  std::memcpy(&u, &f, 4);
-  u = f > 0 ? u + 1 : u - 1;
-  std::memcpy(&f, &u, 4);
-  return f;
-}
-float float_down(float f) { return -float_up(-f); }
-}  // namespace
-
-void float_bounds(double x, float* lo, float* hi) {
-  const float f = float(x);  // to nearest; then one step outwards where it went the other way
-  *lo = double(f) > x ? float_down(f) : f;
-  *hi = double(f) < x ? float_up(f) : f;
-}
-
 void distance_prefilter_limits(double best, double best2, double eps_p, float* plane_lim, float* box_lim) {
   float lo;
   float_bounds((best + eps_p) * (1 + 1e-9), &lo, plane_lim);

@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "harness/core/geometry.hpp"
+#include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 
 namespace ebp {
@@ -68,7 +69,5 @@ const LeafKernelTable& leaf_kernel_table();
 /// (< 3e-7 relative) and leave the per-triangle tests' double comparisons strictly decided, so
 /// the filter never clears a triangle that they would keep.
 void distance_prefilter_limits(double best, double best2, double eps_p, float* plane_lim, float* box_lim);
-/// x rounded to float towards -infinity (lo) and +infinity (hi).
-void float_bounds(double x, float* lo, float* hi);
 
 }  // namespace ebp

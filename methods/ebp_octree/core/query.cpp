@@ -38,6 +38,9 @@ void Query::reset_path() {
   last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
   near_.valid = false;
+  dnear_.valid = false;
+  dprev_ok_ = false;
+  dnear_backoff_ = 0;
   walk_.root = UINT32_MAX;  // a new path walks from the root again: each pass counts the same work
 }
 

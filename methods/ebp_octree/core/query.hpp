@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "methods/ebp_octree/core/near_set.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 
 namespace ebp {
@@ -21,6 +22,9 @@ struct QueryCounters {
   std::uint64_t certificate_renewals = 0;  ///< relaxed branch and bounds that renewed the certificate
   std::uint64_t certificate_served = 0;    ///< distance queries answered by a scan of the certificate
   std::uint64_t signs_chained = 0;         ///< signs taken from the previous query (no inside test)
+  // the coherent distance's near start (near_set.hpp, DESIGN.md "Distance in contact")
+  std::uint64_t near_served = 0;    ///< searches answered from the near set (no descent)
+  std::uint64_t near_gathered = 0;  ///< near sets gathered (after a search the set did not hold)
 };
 
 class DistanceCertificate;
@@ -102,16 +106,7 @@ class Query {
   // coherent inside (closed meshes): the last point of the path whose winding number is known
   // exactly (see classify_leaf and DESIGN.md), and the triangles near the path: those whose
   // boxes meet the float box [lo, hi] around it, from every leaf whose cell meets it, each once,
-  // with their boxes (SoA, padded to 4 with empty boxes). A cache of derived data: answers do
-  // not depend on it.
-  static constexpr std::uint32_t kNearMax = 64;
-  struct NearSet {
-    bool valid = false;
-    float lo[3], hi[3];
-    std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 4) hold empty boxes
-    float blo[3][kNearMax], bhi[3][kNearMax];
-    std::uint32_t k[kNearMax];  ///< LeafTri index
-  };
+  // with their boxes (near_set.hpp). A cache of derived data: answers do not depend on it.
   bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
   bool gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node);
   NearSet near_;
@@ -137,6 +132,16 @@ class Query {
     Vec3d lo[kMaxLevel + 2];
   };
   Walk walk_;
+  // coherent distance: the near start's set, the triangles whose boxes meet a box about the last
+  // gathering's ball (p, best) grown by the probe's step; a search whose ball lies in that box
+  // tests only the members the ball's box meets, with no descent (DESIGN.md, "Distance in
+  // contact"). A cache of the tree's own triangles: answers do not depend on it.
+  void gather_distance_near(const Vec3d& p, double r);
+  NearSet dnear_;
+  bool dprev_ok_ = false;
+  Vec3d dprev_p_;
+  double dstep_ = 0;                 ///< the last step of the path (max norm)
+  std::uint32_t dnear_backoff_ = 0;  ///< searches left before the next gathering (after a failed one)
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;

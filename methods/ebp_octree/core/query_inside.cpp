@@ -19,26 +19,6 @@
 
 namespace ebp {
 
-namespace {
-/// The next float towards -inf (dir < 0) or +inf (dir > 0) of a finite float.
-inline float float_step(float f, int dir) {
-  if (f == 0.0f) return dir < 0 ? -std::numeric_limits<float>::denorm_min() : std::numeric_limits<float>::denorm_min();
-  std::uint32_t u;
-  std::memcpy(&u, &f, 4);
-  u = ((f > 0) == (dir > 0)) ? u + 1 : u - 1;
-  std::memcpy(&f, &u, 4);
-  return f;
-}
-/// The largest float <= x and the smallest float >= x (x finite, within the float range).
-inline float float_down(double x) {
-  const float f = float(x);
-  return double(f) > x ? float_step(f, -1) : f;
-}
-inline float float_up(double x) {
-  const float f = float(x);
-  return double(f) < x ? float_step(f, 1) : f;
-}
-}  // namespace
 
 // Point location by octcode descent, with the coherent shortcut (the previous point's node when
 // p is in its cell). In this file so that the compiler can inline it into inside().
@@ -236,18 +216,26 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d s1{std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)};
   const float f0[3] = {float_down(s0.x), float_down(s0.y), float_down(s0.z)};
   const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
-  const NearSet& ns = near_;
-  if (!(ns.valid && ns.lo[0] <= f0[0] && ns.lo[1] <= f0[1] && ns.lo[2] <= f0[2] && f1[0] <= ns.hi[0] &&
-        f1[1] <= ns.hi[1] && f1[2] <= ns.hi[2])) {
-    // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
-    // reference path is cheaper than gathering the triangles of up to 8 leaves.
-    const double jump = 0.25 * t_.cell_size(t_.leaf_level);
-    if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, leaf_node)) return false;
+  // The step's near set, or the coherent distance's (it holds every triangle meeting its box
+  // too, the zero-area ones included, which cross nothing), or a new step's near set.
+  const NearSet* set = &near_;
+  if (!near_.holds(f0, f1)) {
+    if (dnear_.holds(f0, f1)) {
+      set = &dnear_;
+    } else {
+      // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
+      // reference path is cheaper than gathering the triangles of up to 8 leaves.
+      const double jump = 0.25 * t_.cell_size(t_.leaf_level);
+      if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, leaf_node))
+        return false;
+    }
   }
+  const NearSet& ns = *set;
   const LeafTri* tris = t_.tris.data();
   int w = prev_w_;
   auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
     const LeafTri& t = tris[k];
+    if (t.flags & kDegenerate) return 1;  // zero area: crosses nothing
     const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
     ++counters.planes_tested;
     const int sq = orient3d(a, b, c, q);
@@ -263,29 +251,13 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
     }
     return -1;
   };
-#if defined(__SSE2__)
-  const __m128 ax = _mm_set1_ps(f0[0]), ay = _mm_set1_ps(f0[1]), az = _mm_set1_ps(f0[2]);
-  const __m128 bx = _mm_set1_ps(f1[0]), by = _mm_set1_ps(f1[1]), bz = _mm_set1_ps(f1[2]);
-  for (std::uint32_t j = 0; j < ns.n; j += 4) {
-    __m128 m = _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[0] + j), ax), _mm_cmple_ps(_mm_loadu_ps(ns.blo[0] + j), bx));
-    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[1] + j), ay), _mm_cmple_ps(_mm_loadu_ps(ns.blo[1] + j), by)));
-    m = _mm_and_ps(m, _mm_and_ps(_mm_cmpge_ps(_mm_loadu_ps(ns.bhi[2] + j), az), _mm_cmple_ps(_mm_loadu_ps(ns.blo[2] + j), bz)));
-    for (unsigned bits = unsigned(_mm_movemask_ps(m)); bits; bits &= bits - 1) {
-      const int r = test(ns.k[j + unsigned(__builtin_ctz(bits))]);
-      if (r < 0) return false;
-      if (r == 0) { *wout = 1; return true; }
-    }
-  }
-#else
-  for (std::uint32_t j = 0; j < ns.n; ++j) {
-    if (ns.bhi[0][j] < f0[0] || ns.blo[0][j] > f1[0] || ns.bhi[1][j] < f0[1] || ns.blo[1][j] > f1[1] ||
-        ns.bhi[2][j] < f0[2] || ns.blo[2][j] > f1[2])
-      continue;
-    const int r = test(ns.k[j]);
-    if (r < 0) return false;
-    if (r == 0) { *wout = 1; return true; }
-  }
-#endif
+  int stop = 1;  // 1: went through the near set, 0: p on a triangle, -1: give up
+  ns.for_each_meeting(f0, f1, [&](std::uint32_t j) {
+    stop = test(ns.k[j]);
+    return stop > 0;
+  });
+  if (stop < 0) return false;
+  if (stop == 0) { *wout = 1; return true; }
   *wout = w;
   prev_p_ = p;
   prev_w_ = w;
@@ -293,7 +265,7 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
 }
 
 // The near set around the box [s0, s1] (step_from_prev): its box is [s0, s1] grown by a margin
-// of kNearMargin leaf cells (or not grown, if the grown box fails below), rounded outwards to
+// of 1/32 of a leaf cell (or not grown, if the grown box fails below), rounded outwards to
 // float. The box must lie in the union of the closed leaf-grid cells [cell(lo), cell(hi)], at
 // most 2 per axis (checked exactly against the exact cell boundaries of Octree::cell_box); a
 // triangle that meets a closed cell is listed in that cell's leaf (empty nodes have none), so
@@ -301,82 +273,15 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
 // are tested by their (derived) boxes, then the triangles of the blocks that meet it by their own
 // (box_pass), and an input triangle listed in two leaves is kept once. Fails (valid = false)
 // when the box spans more cells, a cell is an out-of-core page's stand-in for another page (an
-// empty node that is not the cell's ancestor), or more than kNearMax triangles meet it.
+// empty node that is not the cell's ancestor), or more than kNearMax triangles meet it
+// (NearSet::gather, near_set.hpp).
 bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node) {
-  constexpr double kNearMargin = 1.0 / 32;
-  NearSet& ns = near_;
-  const int L = t_.leaf_level;
-  const double cs = t_.cell_size(L), inv = 1.0 / cs;
-  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
-  const LeafTri* tris = t_.tris.data();
-  const LeafKernelTable& K = leaf_kernel_table();
-  for (const double margin : {kNearMargin * cs, 0.0}) {
-    ns.valid = false;
-    ns.n = 0;
-    const Vec3d g0 = s0 - Vec3d(margin, margin, margin), g1 = s1 + Vec3d(margin, margin, margin);
-    for (int a = 0; a < 3; ++a) {
-      ns.lo[a] = float_down(std::min(g0[a], s0[a]));  // (the margin's rounding never shrinks the box)
-      ns.hi[a] = float_up(std::max(g1[a], s1[a]));
-    }
-    std::uint32_t r0[3], r1[3];
-    bool fits = true;
-    for (int a = 0; a < 3 && fits; ++a) {
-      auto cell = [&](double v) {
-        const double r = std::floor((v - t_.root_lo[a]) * inv);
-        return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
-      };
-      r0[a] = cell(ns.lo[a]);
-      r1[a] = cell(ns.hi[a]);
-      fits = r1[a] - r0[a] <= 1 && t_.root_lo[a] + double(r0[a]) * cs <= double(ns.lo[a]) &&
-             double(ns.hi[a]) <= t_.root_lo[a] + double(r1[a] + 1) * cs;
-    }
-    if (!fits) continue;
-    const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
-    bool ok = true;
-    auto add = [&](std::uint32_t k) {
-      const LeafTri& t = tris[k];
-      if (several)
-        for (std::uint32_t j = 0; j < ns.n; ++j)
-          if (tris[ns.k[j]].tri == t.tri) return;
-      if (ns.n == kNearMax) { ok = false; return; }
-      const std::uint32_t j = ns.n++;
-      ns.k[j] = k;
-      for (int a = 0; a < 3; ++a) {
-        ns.blo[a][j] = std::min({t.a[a], t.b[a], t.c[a]});
-        ns.bhi[a][j] = std::max({t.a[a], t.b[a], t.c[a]});
-      }
-    };
-    for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
-      for (std::uint32_t y = r0[1]; y <= r1[1] && ok; ++y)
-        for (std::uint32_t x = r0[0]; x <= r1[0] && ok; ++x) {
-          const std::uint32_t i = several ? t_.locate_cell(x, y, z) : leaf_node;
-          const Node& nd = t_.nodes[i];
-          if (nd.kind != NodeKind::leaf) {
-            if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
-            continue;  // an empty node: no triangle meets its closed cell
-          }
-          const Leaf& lf = t_.leaves[nd.index];
-          const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[nd.index];
-          const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
-          for (std::uint32_t b0 = 0; b0 < nb && ok; b0 += 8)
-            for (unsigned bh = K.block_pass(boxes + b0, std::min(nb - b0, 8u), ns.lo, ns.hi); bh && ok; bh &= bh - 1) {
-              const std::uint32_t k = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
-              const std::uint32_t first = lf.tri_begin + k;
-              for (unsigned hit = K.box_pass(tris + first, std::min(lf.tri_count - k, kBlockTris), ns.lo, ns.hi);
-                   hit && ok; hit &= hit - 1)
-                add(first + unsigned(__builtin_ctz(hit)));
-            }
-        }
-    if (!ok) continue;
-    for (std::uint32_t j = ns.n; j % 4 != 0; ++j)  // padding: empty boxes
-      for (int a = 0; a < 3; ++a) {
-        ns.blo[a][j] = std::numeric_limits<float>::infinity();
-        ns.bhi[a][j] = -std::numeric_limits<float>::infinity();
-      }
-    ns.valid = true;
-    return true;
-  }
-  return false;
+  const double margin = (1.0 / 32) * t_.cell_size(t_.leaf_level);
+  const Vec3d m{margin, margin, margin};
+  // (the margin's rounding never shrinks the box: min/max with the unmargined corners)
+  const Vec3d g0{std::min(s0.x - m.x, s0.x), std::min(s0.y - m.y, s0.y), std::min(s0.z - m.z, s0.z)};
+  const Vec3d g1{std::max(s1.x + m.x, s1.x), std::max(s1.y + m.y, s1.y), std::max(s1.z + m.z, s1.z)};
+  return near_.gather(t_, g0, g1, leaf_node, false) || near_.gather(t_, s0, s1, leaf_node, false);
 }
 
 bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {

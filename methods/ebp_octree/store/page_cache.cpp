@@ -16,6 +16,8 @@ void add_counters(QueryCounters& a, const QueryCounters& b) {
   a.certificate_renewals += b.certificate_renewals;
   a.certificate_served += b.certificate_served;
   a.signs_chained += b.signs_chained;
+  a.near_served += b.near_served;
+  a.near_gathered += b.near_gathered;
 }
 
 PageCache::PageCache(const StoreReader& store, std::size_t budget_bytes, bool coherent)

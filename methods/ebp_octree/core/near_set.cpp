@@ -1,0 +1,105 @@
+// The near set of a coherent path (near_set.hpp): its gathering over the leaf-grid cells its box
+// meets, and the outward float rounding of its box.
+#include "methods/ebp_octree/core/near_set.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
+
+namespace ebp {
+
+bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node,
+                     bool with_degenerate) {
+  valid = false;
+  n = 0;
+  const int L = t.leaf_level;
+  const double cs = t.cell_size(L), inv = 1.0 / cs;
+  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = float_down(glo[a]);
+    hi[a] = float_up(ghi[a]);
+  }
+  std::uint32_t r0[3], r1[3];
+  for (int a = 0; a < 3; ++a) {
+    auto cell = [&](double v) {
+      const double r = std::floor((v - t.root_lo[a]) * inv);
+      return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
+    };
+    r0[a] = cell(lo[a]);
+    r1[a] = cell(hi[a]);
+    const bool fits = r1[a] - r0[a] <= 1 && t.root_lo[a] + double(r0[a]) * cs <= double(lo[a]) &&
+                      double(hi[a]) <= t.root_lo[a] + double(r1[a] + 1) * cs;
+    if (!fits) return false;
+  }
+  const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
+  const LeafTri* tris = t.tris.data();
+  const LeafKernelTable& K = leaf_kernel_table();
+  bool ok = true;
+  // A triangle listed in two of the cells is kept once: an open-addressed set of input indices
+  // (at most kNearMax + 1 entries in 2 kNearMax slots: never full).
+  constexpr std::uint32_t kSlots = 2 * kNearMax;
+  std::uint32_t seen[kSlots];
+  if (several) std::fill(seen, seen + kSlots, UINT32_MAX);
+  auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni) {
+    const LeafTri& tr = tris[kk];
+    if (several) {
+      std::uint32_t h = (tr.tri * 0x9E3779B1u) >> 24;  // 8 bits: kSlots = 128 ... 256
+      for (h %= kSlots; seen[h] != UINT32_MAX; h = (h + 1) % kSlots)
+        if (seen[h] == tr.tri) return;
+      seen[h] = tr.tri;
+    }
+    if (n == kNearMax) { ok = false; return; }
+    const std::uint32_t j = n++;
+    k[j] = kk;
+    leaf[j] = li;
+    node[j] = ni;
+    for (int a = 0; a < 3; ++a) {
+      blo[a][j] = std::min({tr.a[a], tr.b[a], tr.c[a]});
+      bhi[a][j] = std::max({tr.a[a], tr.b[a], tr.c[a]});
+    }
+  };
+  auto meets = [&](const LeafTri& tr) {
+    for (int a = 0; a < 3; ++a)
+      if (std::max({tr.a[a], tr.b[a], tr.c[a]}) < lo[a] || std::min({tr.a[a], tr.b[a], tr.c[a]}) > hi[a]) return false;
+    return true;
+  };
+  for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
+    for (std::uint32_t y = r0[1]; y <= r1[1] && ok; ++y)
+      for (std::uint32_t x = r0[0]; x <= r1[0] && ok; ++x) {
+        const std::uint32_t ni = (several || leaf_node == UINT32_MAX) ? t.locate_cell(x, y, z) : leaf_node;
+        const Node& nd = t.nodes[ni];
+        if (nd.kind != NodeKind::leaf) {
+          if (!octcode_contains(nd.code, octcode_from_cell(L, x, y, z))) return false;
+          continue;  // an empty node: no triangle meets its closed cell
+        }
+        const Leaf& lf = t.leaves[nd.index];
+        const BlockBox* boxes = t.blocks.data() + t.leaf_block[nd.index];
+        const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+        for (std::uint32_t b0 = 0; b0 < nb && ok; b0 += 8)
+          for (unsigned bh = K.block_pass(boxes + b0, std::min(nb - b0, 8u), lo, hi); bh && ok; bh &= bh - 1) {
+            const std::uint32_t first_in_leaf = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
+            const std::uint32_t first = lf.tri_begin + first_in_leaf;
+            const unsigned m = std::min(lf.tri_count - first_in_leaf, kBlockTris);
+            unsigned hit = K.box_pass(tris + first, m, lo, hi);
+            if (with_degenerate)  // box_pass leaves zero-area triangles out; a distance cannot
+              for (unsigned l = 0; l < m; ++l)
+                if ((tris[first + l].flags & kDegenerate) && meets(tris[first + l])) hit |= 1u << l;
+            for (; hit && ok; hit &= hit - 1) add(first + unsigned(__builtin_ctz(hit)), nd.index, ni);
+          }
+      }
+  if (!ok) {
+    n = 0;
+    return false;
+  }
+  for (std::uint32_t j = n; j % 4 != 0; ++j)  // padding: empty boxes
+    for (int a = 0; a < 3; ++a) {
+      blo[a][j] = std::numeric_limits<float>::infinity();
+      bhi[a][j] = -std::numeric_limits<float>::infinity();
+    }
+  valid = true;
+  return true;
+}
+
+}  // namespace ebp
