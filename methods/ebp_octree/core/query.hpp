@@ -24,7 +24,8 @@ struct QueryCounters {
   std::uint64_t signs_chained = 0;         ///< signs taken from the previous query (no inside test)
   // the coherent distance's near start (near_set.hpp, DESIGN.md "Distance in contact")
   std::uint64_t near_served = 0;    ///< searches answered from the near set (no descent)
-  std::uint64_t near_gathered = 0;  ///< near sets gathered (after a search the set did not hold)
+  std::uint64_t near_gathered = 0;  ///< near sets gathered or attempted (after a search the set did not hold)
+  std::uint64_t near_tested = 0;    ///< near set members compared with a search's ball
 };
 
 class DistanceCertificate;

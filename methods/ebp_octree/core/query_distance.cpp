@@ -138,6 +138,7 @@ class Query::DistanceSearch {
       test_triangle(ns.k[j], ns.leaf[j]);
     }
     ++counters.near_served;
+    counters.near_tested += ns.n;
     return true;
   }
 

@@ -18,6 +18,7 @@ void add_counters(QueryCounters& a, const QueryCounters& b) {
   a.signs_chained += b.signs_chained;
   a.near_served += b.near_served;
   a.near_gathered += b.near_gathered;
+  a.near_tested += b.near_tested;
 }
 
 PageCache::PageCache(const StoreReader& store, std::size_t budget_bytes, bool coherent)
