@@ -13,6 +13,7 @@ namespace ebp {
 bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node,
                      bool with_degenerate) {
   valid = false;
+  overflowed = false;
   n = 0;
   const int L = t.leaf_level;
   const double cs = t.cell_size(L), inv = 1.0 / cs;
@@ -50,7 +51,11 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
         if (seen[h] == tr.tri) return;
       seen[h] = tr.tri;
     }
-    if (n == kNearMax) { ok = false; return; }
+    if (n == kNearMax) {
+      ok = false;
+      overflowed = true;
+      return;
+    }
     const std::uint32_t j = n++;
     k[j] = kk;
     leaf[j] = li;

@@ -19,6 +19,7 @@ inline constexpr std::uint32_t kNearMax = 64;
 
 struct NearSet {
   bool valid = false;
+  bool overflowed = false;  ///< the last gather failed because more than kNearMax triangles meet its box
   float lo[3], hi[3];
   std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 4) hold empty boxes
   alignas(16) float blo[3][kNearMax];

@@ -41,6 +41,9 @@ void Query::reset_path() {
   dnear_.valid = false;
   dprev_ok_ = false;
   dnear_backoff_ = 0;
+  dnear_scale_ = 1.0;
+  dnear_served_ = dnear_losses_ = 0;
+  dnear_tried_ = false;
   walk_.root = UINT32_MAX;  // a new path walks from the root again: each pass counts the same work
 }
 

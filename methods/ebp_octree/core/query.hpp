@@ -142,7 +142,12 @@ class Query {
   bool dprev_ok_ = false;
   Vec3d dprev_p_;
   double dstep_ = 0;                 ///< the last step of the path (max norm)
-  std::uint32_t dnear_backoff_ = 0;  ///< searches left before the next gathering (after a failed one)
+  // the gathering's policy (gather_distance_near): the box's scale, the searches the current
+  // set served, the sets in a row that served none, searches left before the next gathering
+  double dnear_scale_ = 1.0;
+  std::uint32_t dnear_served_ = 0, dnear_losses_ = 0;
+  bool dnear_tried_ = false;
+  std::uint32_t dnear_backoff_ = 0;
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;

@@ -598,7 +598,10 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     dprev_p_ = p;
     dprev_ok_ = true;
     search.seed_triangle();
-    if (search.near_start(dnear_)) return;
+    if (search.near_start(dnear_)) {
+      ++dnear_served_;
+      return;
+    }
     search.seed_leaf();
   } else {
     search.coherent_start();
@@ -608,26 +611,44 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 }
 
 // A near set for the next searches of the path: about the ball (p, r) just searched, grown by
-// kNearBall x r and kNearSteps steps of the probe (callgrind on the 1M bunny's contact path:
-// steps 1 / 2 / 4 / 8 / 16 gave 1,421 / 1,282 / 1,181 / 1,266 / 1,608 instructions a search;
-// ball 0.5 / 1 / 2 gave 1,201 / 1,181 / 1,167), so that the next balls (their radius at most r plus the
-// step, the previous closest point being on the surface) lie in it for a few steps; a smaller
-// one if that meets too many triangles or too many leaf cells; none if that fails too, and no
-// new attempt for the next kNearBackoff searches (a path far from the surface, or in a region
-// too dense: the tree's search is then cheaper than gathering on every query).
+// scale x (kNearBall x r + kNearSteps steps of the probe), so that the next balls (their radius
+// at most r plus the step, the previous closest point being on the surface) lie in it for a few
+// steps (callgrind on the 1M bunny's contact path, scale 1: steps 1 / 2 / 4 / 8 / 16 gave
+// 1,421 / 1,282 / 1,181 / 1,266 / 1,608 instructions a search; ball 0.5 / 1 / 2 gave 1,201 /
+// 1,181 / 1,167). A box that meets too many triangles or leaf cells gets a second attempt at a
+// quarter of the growth at once; the scale is the path's: halved when a box meets too many
+// triangles (small triangles), doubled back (up to 1) when a set is less than a quarter full. A
+// set that served no search before the next gathering was a loss: after two in a row the path
+// gathers no set for 8 searches, doubling while the losses go on (up to 256) — a path far from
+// the surface, sliding fast, or on triangles so small that no set of kNearMax holds the next
+// ball, where the tree's search alone is cheaper. Attempts that fail count as gatherings.
 void Query::gather_distance_near(const Vec3d& p, double r) {
-  constexpr double kNearBall = 2.0, kNearSteps = 4.0;
-  constexpr std::uint32_t kNearBackoff = 8;
+  constexpr double kNearBall = 2.0, kNearSteps = 4.0, kMinScale = 1.0 / 64;
+  constexpr std::uint32_t kNearLosses = 3, kNearBackoff = 8, kNearBackoffMax = 256;
   if (dnear_backoff_ > 0) {
     --dnear_backoff_;
     return;
   }
   if (!(r < std::numeric_limits<double>::infinity())) return;
-  const double grow[2] = {kNearBall * r + kNearSteps * dstep_, 0.25 * (kNearBall * r + kNearSteps * dstep_)};
-  for (const double g : grow) {
-    const double h = r + g;
+  if (dnear_tried_) {  // the last set's outcome (after a pause, the next set is tried first)
+    dnear_losses_ = dnear_served_ == 0 ? dnear_losses_ + 1 : 0;
+    if (dnear_losses_ >= kNearLosses) {
+      dnear_backoff_ = std::min(kNearBackoffMax, kNearBackoff << std::min<std::uint32_t>(dnear_losses_ - kNearLosses, 5));
+      dnear_.valid = false;
+      dnear_tried_ = false;
+      return;
+    }
+  }
+  dnear_served_ = 0;
+  dnear_tried_ = true;
+  for (const double part : {1.0, 0.25}) {
+    const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * dstep_);
     ++counters.near_gathered;
-    if (dnear_.gather(t_, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true)) return;
+    if (dnear_.gather(t_, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true)) {
+      if (dnear_.n < kNearMax / 4) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
+      return;
+    }
+    if (dnear_.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
   }
   dnear_backoff_ = kNearBackoff;
 }
