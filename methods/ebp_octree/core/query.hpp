@@ -53,6 +53,10 @@ struct DistanceBest {
   /// collector's (best holds it); the caller takes the answer from the collector.
   DistanceCertificate* collect = nullptr;
   std::uint32_t collect_page = UINT32_MAX;
+  /// Set by a search answered by its near start (DistanceStart::near): every triangle of the
+  /// whole mesh within the best lies in the near set's box, which lies in this tree's own leaf
+  /// cells, so no other tree (out-of-core page) can hold a better one.
+  bool near_certified = false;
 };
 
 /// Where and how Query::distance_bound starts.
@@ -62,6 +66,10 @@ struct DistanceStart {
   std::uint32_t seed_leaf = UINT32_MAX;   ///< a leaf scanned before the descent
   std::uint32_t seed_node = UINT32_MAX;   ///< its node, if known (its planes then bound the blocks)
   std::uint32_t node = 0;                 ///< the subtree searched (its whole geometry)
+  /// The near start may answer (on a coherent query state): the caller wants the minimum over
+  /// the tree's whole geometry (in memory the tree, out of core a page whose geometry is all in
+  /// its subtree), not a subtree's.
+  bool near = false;
 };
 
 /// Query state over a built Octree: per-query stamps, the coherent path state, counters.

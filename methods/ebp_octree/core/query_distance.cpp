@@ -538,6 +538,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
     s.seed_tri = last_tri_;
     s.seed_leaf = last_leaf_;
     s.seed_node = last_leaf_node_;
+    s.near = true;
   }
   distance_bound(p, b, s);
   DistanceAnswer r;
@@ -588,9 +589,10 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   }
   B.k = B.leaf = B.node = UINT32_MAX;
   DistanceSearch search(*this, p, B, s);
-  // The near start: a coherent search of this whole tree for its own best (not a renewal's
-  // collection, whose prune radius is the collector's).
-  const bool near = coherent_ && s.node == 0 && s.key_of == nullptr && !B.collect;
+  // The near start: a coherent search of this tree's whole geometry for its own best (not a
+  // renewal's collection, whose prune radius is the collector's).
+  B.near_certified = false;
+  const bool near = coherent_ && s.near && !B.collect;
   if (near) {
     dstep_ = dprev_ok_ ? std::max({std::fabs(p.x - dprev_p_.x), std::fabs(p.y - dprev_p_.y),
                                    std::fabs(p.z - dprev_p_.z)})
@@ -600,6 +602,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     search.seed_triangle();
     if (search.near_start(dnear_)) {
       ++dnear_served_;
+      B.near_certified = true;
       return;
     }
     search.seed_leaf();

@@ -131,6 +131,11 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
     s.seed_tri = last_k_;
     s.seed_leaf = last_leaf_;
     s.seed_node = last_node_;
+    // The page's near start (DESIGN.md, "Near start"): a page's geometry is all in its subtree
+    // (the chain above it has none), and a near set is only gathered within the page's own
+    // leaf cells (a stand-in for another page fails the gathering), so a search it answers is
+    // the whole mesh's.
+    s.near = true;
   }
   const Work w0 = work_of(e.query->counters);
   e.query->distance_bound(p, bst.b, s);
@@ -158,7 +163,10 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     page_stamp_[id] = qid;
     page_distance(id, cache_.get(id), p, bst);
   };
-  if (coherent_ && last_page_ != UINT32_MAX) visit_page(last_page_);
+  if (coherent_ && last_page_ != UINT32_MAX) {
+    visit_page(last_page_);
+    if (bst.b.near_certified) return;  // the previous page's near set holds the ball: no other page can win
+  }
 
   const Vec3d pr = p - root_centre_;
   const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);

@@ -23,6 +23,8 @@
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/ebp_test_support.hpp"
+#include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
 #include "support/test_support.hpp"
 
 using namespace ebp_test;
@@ -205,4 +207,27 @@ TEST(EbpNearSet, StressMeshesAreExact) {
       ASSERT_TRUE(same_answer(near.distance(path[i]), tree.distance(path[i]))) << name << " query " << i;
     EXPECT_GT(near.counters.near_served, 0u) << name;
   }
+}
+
+// Out of core: the previous page's near start answers most searches of a contact path (the
+// other pages are not visited), bit for bit as the in-memory search without coherence, with
+// small pages (so that balls often leave a page) and a cache that evicts.
+TEST(EbpNearSet, OutOfCorePagesAnswerBitForBit) {
+  const Mesh m = bvhbench::load_mesh(shared_mesh("fandisk.obj"));
+  BuildParams bp;
+  bp.threads = 1;
+  const Octree t = Octree::build(m.vertices, m.triangles, bp);
+  bvhbench::test::TmpDir d("ebp_near_test");
+  StoreWriteOptions o;
+  o.page_target = 4096;
+  write_store_atomic(t, d.file("f.ebp"), o);
+  const std::vector<Vec3d> path = contact(m, 3000, 0.2, 0.1);  // world coordinates: OutOfCore's
+  Query tree(t, false);
+  OutOfCore ooc(d.file("f.ebp"), 64 << 10, true, false);
+  ooc.set_certificate(false);
+  for (std::size_t i = 0; i < path.size(); ++i)
+    ASSERT_TRUE(same_answer(tree.distance(t.to_frame(path[i])), ooc.distance(path[i]))) << "query " << i;
+  const QueryCounters k = ooc.counters();
+  EXPECT_GT(k.near_served, path.size() / 3);
+  EXPECT_GT(ooc.cache().evictions, 0u);
 }
