@@ -37,8 +37,8 @@ void Query::reset_path() {
   last_leaf_ = UINT32_MAX;
   last_leaf_node_ = UINT32_MAX;
   prev_ok_ = false;
-  near_.valid = false;
-  dnear_.valid = false;
+  if (near_) near_->valid = false;
+  if (dnear_) dnear_->valid = false;
   dprev_ok_ = false;
   dnear_backoff_ = 0;
   dnear_scale_ = 1.0;

@@ -118,7 +118,16 @@ class Query {
   // with their boxes (near_set.hpp). A cache of derived data: answers do not depend on it.
   bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
   bool gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node);
-  NearSet near_;
+  // The near sets are allocated on first use: an out-of-core page has a Query of its own, and
+  // most pages never need one (2.3 KB each).
+  static NearSet& allocated(std::unique_ptr<NearSet>& s) {
+    if (!s) s = std::make_unique<NearSet>();
+    return *s;
+  }
+  static bool holds(const std::unique_ptr<NearSet>& s, const float f0[3], const float f1[3]) {
+    return s && s->holds(f0, f1);
+  }
+  std::unique_ptr<NearSet> near_;
   bool prev_ok_ = false;
   Vec3d prev_p_;
   int prev_w_ = 0;
@@ -146,7 +155,7 @@ class Query {
   // tests only the members the ball's box meets, with no descent (DESIGN.md, "Distance in
   // contact"). A cache of the tree's own triangles: answers do not depend on it.
   void gather_distance_near(const Vec3d& p, double r);
-  NearSet dnear_;
+  std::unique_ptr<NearSet> dnear_;
   bool dprev_ok_ = false;
   Vec3d dprev_p_;
   double dstep_ = 0;                 ///< the last step of the path (max norm)

@@ -600,7 +600,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
     dprev_p_ = p;
     dprev_ok_ = true;
     search.seed_triangle();
-    if (search.near_start(dnear_)) {
+    if (dnear_ && search.near_start(*dnear_)) {
       ++dnear_served_;
       B.near_certified = true;
       return;
@@ -637,21 +637,22 @@ void Query::gather_distance_near(const Vec3d& p, double r) {
     dnear_losses_ = dnear_served_ == 0 ? dnear_losses_ + 1 : 0;
     if (dnear_losses_ >= kNearLosses) {
       dnear_backoff_ = std::min(kNearBackoffMax, kNearBackoff << std::min<std::uint32_t>(dnear_losses_ - kNearLosses, 5));
-      dnear_.valid = false;
+      if (dnear_) dnear_->valid = false;
       dnear_tried_ = false;
       return;
     }
   }
   dnear_served_ = 0;
   dnear_tried_ = true;
+  NearSet& ns = allocated(dnear_);
   for (const double part : {1.0, 0.25}) {
     const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * dstep_);
     ++counters.near_gathered;
-    if (dnear_.gather(t_, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true)) {
-      if (dnear_.n < kNearMax / 4) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
+    if (ns.gather(t_, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true)) {
+      if (ns.n < kNearMax / 4) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
       return;
     }
-    if (dnear_.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
+    if (ns.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
   }
   dnear_backoff_ = kNearBackoff;
 }

@@ -218,16 +218,17 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const float f1[3] = {float_up(s1.x), float_up(s1.y), float_up(s1.z)};
   // The step's near set, or the coherent distance's (it holds every triangle meeting its box
   // too, the zero-area ones included, which cross nothing), or a new step's near set.
-  const NearSet* set = &near_;
-  if (!near_.holds(f0, f1)) {
-    if (dnear_.holds(f0, f1)) {
-      set = &dnear_;
+  const NearSet* set = near_.get();
+  if (!holds(near_, f0, f1)) {
+    if (holds(dnear_, f0, f1)) {
+      set = dnear_.get();
     } else {
       // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
       // reference path is cheaper than gathering the triangles of up to 8 leaves.
       const double jump = 0.25 * t_.cell_size(t_.leaf_level);
       if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, leaf_node))
         return false;
+      set = near_.get();
     }
   }
   const NearSet& ns = *set;
@@ -281,7 +282,8 @@ bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_nod
   // (the margin's rounding never shrinks the box: min/max with the unmargined corners)
   const Vec3d g0{std::min(s0.x - m.x, s0.x), std::min(s0.y - m.y, s0.y), std::min(s0.z - m.z, s0.z)};
   const Vec3d g1{std::max(s1.x + m.x, s1.x), std::max(s1.y + m.y, s1.y), std::max(s1.z + m.z, s1.z)};
-  return near_.gather(t_, g0, g1, leaf_node, false) || near_.gather(t_, s0, s1, leaf_node, false);
+  NearSet& ns = allocated(near_);
+  return ns.gather(t_, g0, g1, leaf_node, false) || ns.gather(t_, s0, s1, leaf_node, false);
 }
 
 bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {
