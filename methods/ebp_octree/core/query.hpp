@@ -164,6 +164,9 @@ class Query {
   double dnear_scale_ = 1.0;
   std::uint32_t dnear_served_ = 0, dnear_losses_ = 0;
   bool dnear_tried_ = false;
+  // queries of the path so far (in-memory unsigned_distance calls; an out-of-core page's
+  // Query sees only its own searches) and their count when the current set was gathered
+  std::uint64_t path_queries_ = 0, dnear_gathered_at_ = 0;
   std::uint32_t dnear_backoff_ = 0;
   // distance: leaves already scanned by this query, scratch for the block order
   std::vector<std::uint32_t> leaf_stamp_;

@@ -528,6 +528,7 @@ class Query::DistanceSearch {
 };
 
 DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
+  ++path_queries_;
   return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
 }
 
@@ -633,7 +634,10 @@ void Query::gather_distance_near(const Vec3d& p, double r) {
     return;
   }
   if (!(r < std::numeric_limits<double>::infinity())) return;
-  if (dnear_tried_) {  // the last set's outcome (after a pause, the next set is tried first)
+  // The last set's outcome (after a pause, the next set is tried first). A set that other
+  // queries interrupted (certificates answered them) was not given its chance: no loss.
+  const bool interrupted = path_queries_ - dnear_gathered_at_ > 1 + dnear_served_;
+  if (dnear_tried_ && !interrupted) {
     dnear_losses_ = dnear_served_ == 0 ? dnear_losses_ + 1 : 0;
     if (dnear_losses_ >= kNearLosses) {
       dnear_backoff_ = std::min(kNearBackoffMax, kNearBackoff << std::min<std::uint32_t>(dnear_losses_ - kNearLosses, 5));
@@ -644,6 +648,7 @@ void Query::gather_distance_near(const Vec3d& p, double r) {
   }
   dnear_served_ = 0;
   dnear_tried_ = true;
+  dnear_gathered_at_ = path_queries_;
   NearSet& ns = allocated(dnear_);
   for (const double part : {1.0, 0.25}) {
     const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * dstep_);
