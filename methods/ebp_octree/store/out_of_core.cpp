@@ -186,9 +186,37 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     return std::max(b, double(m) - slack);
   };
 
+  // The narrowed start (as the in-memory search's): with a finite best (the previous page's
+  // search), the deepest top node on p's path whose cell holds the ball (p, best + tol)
+  // strictly inside: all geometry outside that cell is strictly farther than the best (a
+  // triangle crossing into the cell is listed in the cell's own leaves too), so nothing it
+  // could win is lost, and the top tree's upper levels are not walked on every query.
+  std::uint32_t start = 0;
+  Vec3d start_lo = root_lo_;
+  int start_level = 0;
+  if (bst.b.best < std::numeric_limits<double>::infinity()) {
+    const double r = bst.b.best + 1e-12 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
+                                          std::max({std::fabs(root_lo_.x), std::fabs(root_lo_.y), std::fabs(root_lo_.z)}) +
+                                          root_size_);
+    while (top_[start].kind == TopKind::inner) {
+      const double csz = root_size_ / double(std::uint64_t(1) << (start_level + 1));
+      const int o = (p.x >= start_lo.x + csz ? 1 : 0) | (p.y >= start_lo.y + csz ? 2 : 0) | (p.z >= start_lo.z + csz ? 4 : 0);
+      const Vec3d clo{start_lo.x + ((o & 1) ? csz : 0.0), start_lo.y + ((o & 2) ? csz : 0.0),
+                      start_lo.z + ((o & 4) ? csz : 0.0)};
+      const bool holds = p.x - clo.x > r && p.y - clo.y > r && p.z - clo.z > r && clo.x + csz - p.x > r &&
+                         clo.y + csz - p.y > r && clo.z + csz - p.z > r;
+      const std::uint32_t ci = top_children_[top_[start].index + std::uint32_t(o)];
+      if (!holds || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
+      ++top_counters_.nodes_visited;
+      start = ci;
+      start_lo = clo;
+      ++start_level;
+    }
+  }
   TopItem stack[8 * (kMaxLevel + 2)];
   int sp = 0;
-  stack[sp++] = {root_lo_, lower_bound(top_[0], root_lo_, root_size_), 0u, 0};
+  stack[sp++] = {start_lo, lower_bound(top_[start], start_lo, root_size_ / double(std::uint64_t(1) << start_level)),
+                 start, start_level};
   while (sp > 0) {
     const TopItem it = stack[--sp];
     if (it.bound > bst.b.best) continue;
