@@ -158,7 +158,8 @@ class Query {
   std::unique_ptr<NearSet> dnear_;
   bool dprev_ok_ = false;
   Vec3d dprev_p_;
-  double dstep_ = 0;                 ///< the last step of the path (max norm)
+  Vec3d dmove_;                      ///< the last step of the path
+  double dstep_ = 0;                 ///< its max norm
   // the gathering's policy (gather_distance_near): the box's scale, the searches the current
   // set served, the sets in a row that served none, searches left before the next gathering
   double dnear_scale_ = 1.0;
