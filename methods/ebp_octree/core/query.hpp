@@ -2,6 +2,8 @@
 /// The queries over a built Octree (query.cpp): the
 /// per-thread query state, its work counters, the distance answer and the running best that the
 /// out-of-core query carries from page to page.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -58,6 +60,23 @@ struct DistanceBest {
   /// cells, so no other tree (out-of-core page) can hold a better one.
   bool near_certified = false;
 };
+
+/// The rounding bound of a distance search at p in a tree whose root cube is (root_lo,
+/// root_size): added to the best distance before a box prunes, it covers the rounding of the box
+/// distance and of the exact closest point (a few ulps of the coordinates), so a box is only
+/// pruned when everything in it is strictly worse than the best. The in-memory search and the
+/// out-of-core top tree use the same.
+inline double search_tol(const Vec3d& p, const Vec3d& root_lo, double root_size) {
+  return 1e-12 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
+                  std::max({std::fabs(root_lo.x), std::fabs(root_lo.y), std::fabs(root_lo.z)}) + root_size);
+}
+
+/// Whether the cube [lo, lo + size] holds the ball (p, r) strictly inside (the narrowed starts:
+/// all geometry outside such a cell is strictly farther than r).
+inline bool cell_holds_ball(const Vec3d& lo, double size, const Vec3d& p, double r) {
+  return p.x - lo.x > r && p.y - lo.y > r && p.z - lo.z > r && lo.x + size - p.x > r && lo.y + size - p.y > r &&
+         lo.z + size - p.z > r;
+}
 
 /// Where and how Query::distance_bound starts.
 struct DistanceStart {
@@ -159,7 +178,6 @@ class Query {
   bool dprev_ok_ = false;
   Vec3d dprev_p_;
   Vec3d dmove_;                      ///< the last step of the path
-  double dstep_ = 0;                 ///< its max norm
   // the gathering's policy (gather_distance_near): the box's scale, the searches the current
   // set served, the sets in a row that served none, searches left before the next gathering
   double dnear_scale_ = 1.0;

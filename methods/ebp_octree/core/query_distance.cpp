@@ -64,13 +64,8 @@ class Query::DistanceSearch {
       : p(p), B(B), s(s), t_(q.t_), counters(q.counters), walk(q.walk_), stamp_(q.stamp_), leaf_stamp_(q.leaf_stamp_),
         order_(q.order_), qid(q.query_id_), tris(t_.tris.data()), key_of(s.key_of), leaves(t_.leaves.data()),
         blocks(t_.blocks.data()), planes(t_.planes.data()), nodes(t_.nodes.data()), nbox(t_.node_box.data()) {
-    // Box bounds (blocks, nodes) are compared with `tol` added to the best distance: it covers
-    // the rounding of the box distance and of the exact-closest-point computation (a few ulps of
-    // the coordinates), so a box is only pruned when everything in it is strictly worse than the
-    // best.
-    tol = 1e-12 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
-                   std::max({std::fabs(t_.root_lo.x), std::fabs(t_.root_lo.y), std::fabs(t_.root_lo.z)}) +
-                   t_.root_size);
+    // Box bounds (blocks, nodes) are compared with `tol` added to the best distance (search_tol).
+    tol = search_tol(p, t_.root_lo, t_.root_size);
     if (B.best < std::numeric_limits<double>::infinity()) lim2 = (B.best + tol) * (B.best + tol);
     // Plane bounds are evaluated in float in the root's frame; `slack` covers their rounding
     // (normals unit to 1e-7, float products), so that every bound stays a lower bound.
@@ -92,19 +87,22 @@ class Query::DistanceSearch {
   /// The previous closest triangle (a valid upper bound).
   void seed_triangle() {
     if (s.seed_tri >= t_.tris.size()) return;
-    const bool known = s.seed_leaf < t_.leaves.size() && s.seed_node < t_.nodes.size() &&
-                       nodes[s.seed_node].kind == NodeKind::leaf && nodes[s.seed_node].index == s.seed_leaf;
-    scan_node = known ? s.seed_node : UINT32_MAX;
+    scan_node = seed_node_known() ? s.seed_node : UINT32_MAX;
     test_triangle(s.seed_tri, s.seed_leaf < t_.leaves.size() ? s.seed_leaf : UINT32_MAX);
   }
 
   /// The seed triangle's whole leaf.
   void seed_leaf() {
     if (s.seed_tri >= t_.tris.size() || s.seed_leaf >= t_.leaves.size()) return;
-    const bool known = s.seed_node < t_.nodes.size() && nodes[s.seed_node].kind == NodeKind::leaf &&
-                       nodes[s.seed_node].index == s.seed_leaf;
+    const bool known = seed_node_known();
     scan_node = known ? s.seed_node : UINT32_MAX;
     scan_leaf(s.seed_leaf, known ? leaf_hint(nodes[s.seed_node]) : PlaneHint{});
+  }
+
+  /// Whether the seed's node is the seed leaf's (its planes then bound the leaf's blocks).
+  bool seed_node_known() const {
+    return s.seed_leaf < t_.leaves.size() && s.seed_node < t_.nodes.size() &&
+           nodes[s.seed_node].kind == NodeKind::leaf && nodes[s.seed_node].index == s.seed_leaf;
   }
 
   /// The near start (after seed_triangle): when the box of the ball (p, best + tol), rounded
@@ -453,10 +451,7 @@ class Query::DistanceSearch {
     }
     if (B.best < std::numeric_limits<double>::infinity()) {
       const double r = B.best + tol;
-      auto holds = [&](const Vec3d& c, double sz) {
-        return p.x - c.x > r && p.y - c.y > r && p.z - c.z > r && c.x + sz - p.x > r && c.y + sz - p.y > r &&
-               c.z + sz - p.z > r;
-      };
+      auto holds = [&](const Vec3d& c, double sz) { return cell_holds_ball(c, sz, p, r); };
       if (holds(lo, size)) {
         // The last walk from this subtree root, resumed at its deepest cell that holds the ball
         // (on a coherent path, usually the seed leaf's cell or its parent's): the levels above
@@ -596,7 +591,6 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   const bool near = coherent_ && s.near && !B.collect;
   if (near) {
     dmove_ = dprev_ok_ ? p - dprev_p_ : Vec3d(0, 0, 0);
-    dstep_ = std::max({std::fabs(dmove_.x), std::fabs(dmove_.y), std::fabs(dmove_.z)});
     dprev_p_ = p;
     dprev_ok_ = true;
     search.seed_triangle();
@@ -619,13 +613,14 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // the surface) lie in it for a few steps (callgrind on the 1M bunny's contact path, scale 1,
 // instructions a search: steps 1 / 2 / 4 / 8 / 16: 1,421 / 1,282 / 1,181 / 1,266 / 1,608; ball
 // 0.5 / 1 / 2: 1,201 / 1,181 / 1,167; ahead 0 / 1 / 2 / 3 / 4 / 6 steps: 1,170 / 1,125 / 1,087 /
-// 1,059 / 1,048 / 1,261, and at 0.3 m/s 0 / 3 / 4: 2,249 / 2,121 / 2,430). A box that meets too many triangles or leaf cells gets a second attempt at a
-// quarter of the growth at once; the scale is the path's: halved when a box meets too many
-// triangles (small triangles), doubled back (up to 1) when a set is less than a quarter full. A
-// set that served no search before the next gathering was a loss: after two in a row the path
-// gathers no set for 8 searches, doubling while the losses go on (up to 256) — a path far from
-// the surface, sliding fast, or on triangles so small that no set of kNearMax holds the next
-// ball, where the tree's search alone is cheaper. Attempts that fail count as gatherings.
+// 1,059 / 1,048 / 1,261, and at 0.3 m/s 0 / 3 / 4: 2,249 / 2,121 / 2,430). A box that meets
+// too many triangles or leaf cells gets a second attempt at a quarter of the growth and offset
+// at once; the scale is the path's: halved when a box meets too many triangles (small
+// triangles), doubled back (up to 1) when a set is less than a quarter full. A set that served
+// no search before the next gathering was a loss: after kNearLosses in a row the path gathers no
+// set for 8 searches, doubling while the losses go on (up to 256) — a path far from the surface,
+// sliding fast, or on triangles so small that no set of kNearMax holds the next ball, where the
+// tree's search alone is cheaper. Attempts that fail count as gatherings.
 void Query::gather_distance_near(const Vec3d& p, double r) {
   constexpr double kNearBall = 2.0, kNearSteps = 4.0, kNearAhead = 3.0, kMinScale = 1.0 / 64;
   constexpr std::uint32_t kNearLosses = 3, kNearBackoff = 8, kNearBackoffMax = 256;
@@ -649,9 +644,10 @@ void Query::gather_distance_near(const Vec3d& p, double r) {
   dnear_served_ = 0;
   dnear_tried_ = true;
   dnear_gathered_at_ = path_queries_;
+  const double step = std::max({std::fabs(dmove_.x), std::fabs(dmove_.y), std::fabs(dmove_.z)});
   NearSet& ns = allocated(dnear_);
   for (const double part : {1.0, 0.25}) {
-    const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * dstep_);
+    const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * step);
     const Vec3d c = p + dmove_ * (part * kNearAhead);
     ++counters.near_gathered;
     if (ns.gather(t_, c - Vec3d(h, h, h), c + Vec3d(h, h, h), UINT32_MAX, true)) {

@@ -195,18 +195,14 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
   Vec3d start_lo = root_lo_;
   int start_level = 0;
   if (bst.b.best < std::numeric_limits<double>::infinity()) {
-    const double r = bst.b.best + 1e-12 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
-                                          std::max({std::fabs(root_lo_.x), std::fabs(root_lo_.y), std::fabs(root_lo_.z)}) +
-                                          root_size_);
+    const double r = bst.b.best + search_tol(p, root_lo_, root_size_);
     while (top_[start].kind == TopKind::inner) {
       const double csz = root_size_ / double(std::uint64_t(1) << (start_level + 1));
       const int o = (p.x >= start_lo.x + csz ? 1 : 0) | (p.y >= start_lo.y + csz ? 2 : 0) | (p.z >= start_lo.z + csz ? 4 : 0);
       const Vec3d clo{start_lo.x + ((o & 1) ? csz : 0.0), start_lo.y + ((o & 2) ? csz : 0.0),
                       start_lo.z + ((o & 4) ? csz : 0.0)};
-      const bool holds = p.x - clo.x > r && p.y - clo.y > r && p.z - clo.z > r && clo.x + csz - p.x > r &&
-                         clo.y + csz - p.y > r && clo.z + csz - p.z > r;
       const std::uint32_t ci = top_children_[top_[start].index + std::uint32_t(o)];
-      if (!holds || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
+      if (!cell_holds_ball(clo, csz, p, r) || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
       ++top_counters_.nodes_visited;
       start = ci;
       start_lo = clo;
