@@ -21,24 +21,46 @@ inline void extra_work(std::uint64_t units) {
   }
 }
 
-/// The method, with extra_work() before every query; everything else forwarded unchanged (batch
-/// calls too, when the method answers in batches).
-class SlowedMethod final : public Method, public BatchAnswers {
+/// A QueryState's calls (Base: QueryState, or Method, which is one) forwarded to `inner`, with
+/// extra_work() before every query: what the slowed method and each of its threads' states share.
+template <class Base>
+class SlowedQueries : public Base {
  public:
-  SlowedMethod(std::unique_ptr<Method> inner, std::string knob, std::uint64_t units)
-      : inner_(std::move(inner)), knob_(std::move(knob)), units_(units) {}
-
+  SlowedQueries(QueryState& inner, std::uint64_t units) : queries_(inner), units_(units) {}
   bool inside(const Vec3d& p) override {
     extra_work(units_);
-    return inner_->inside(p);
+    return queries_.inside(p);
   }
   DistanceResult distance(const Vec3d& p) override {
     extra_work(units_);
-    return inner_->distance(p);
+    return queries_.distance(p);
   }
-  void reset_path() override { inner_->reset_path(); }
-  std::vector<Counter> counters() const override { return inner_->counters(); }
-  void reset_counters() override { inner_->reset_counters(); }
+  void reset_path() override { queries_.reset_path(); }
+  std::vector<Counter> counters() const override { return queries_.counters(); }
+  void reset_counters() override { queries_.reset_counters(); }
+
+ protected:
+  QueryState& queries_;
+  std::uint64_t units_;
+};
+
+/// Another thread's state, slowed the same way.
+class SlowedState final : public SlowedQueries<QueryState> {
+ public:
+  SlowedState(std::unique_ptr<QueryState> inner, std::uint64_t units)
+      : SlowedQueries<QueryState>(*inner, units), inner_(std::move(inner)) {}
+
+ private:
+  std::unique_ptr<QueryState> inner_;  // owns what the base forwards to
+};
+
+/// The method, with extra_work() before every query; everything else forwarded unchanged (batch
+/// calls too, when the method answers in batches).
+class SlowedMethod final : public SlowedQueries<Method>, public BatchAnswers {
+ public:
+  // The base takes *inner before inner_ takes the pointer: the Method it refers to never moves.
+  SlowedMethod(std::unique_ptr<Method> inner, std::string knob, std::uint64_t units)
+      : SlowedQueries<Method>(*inner, units), inner_(std::move(inner)), knob_(std::move(knob)) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     std::cerr << "bvhbench: TEST KNOB BVHBENCH_TEST_SLOWDOWN=" << knob_ << " is set: every query of this "
@@ -71,30 +93,8 @@ class SlowedMethod final : public Method, public BatchAnswers {
   nlohmann::json machine_facts() const override { return inner_->machine_facts(); }
 
  private:
-  /// Another thread's state, slowed the same way.
-  class SlowedState final : public QueryState {
-   public:
-    SlowedState(std::unique_ptr<QueryState> inner, std::uint64_t units) : inner_(std::move(inner)), units_(units) {}
-    bool inside(const Vec3d& p) override {
-      extra_work(units_);
-      return inner_->inside(p);
-    }
-    DistanceResult distance(const Vec3d& p) override {
-      extra_work(units_);
-      return inner_->distance(p);
-    }
-    void reset_path() override { inner_->reset_path(); }
-    std::vector<Counter> counters() const override { return inner_->counters(); }
-    void reset_counters() override { inner_->reset_counters(); }
-
-   private:
-    std::unique_ptr<QueryState> inner_;
-    std::uint64_t units_;
-  };
-
   std::unique_ptr<Method> inner_;
   std::string knob_;
-  std::uint64_t units_;
 };
 
 }  // namespace
