@@ -99,6 +99,72 @@ class Query::DistanceSearch {
     scan_leaf(s.seed_leaf, known ? leaf_hint(nodes[s.seed_node]) : PlaneHint{});
   }
 
+  /// The located start, for a search with no bound yet (no seed, no running best): the leaf
+  /// nearest p along p's own path, scanned before the descent, so that the descent starts with a
+  /// tight bound instead of weighing every child of every level against an infinite one. Down
+  /// p's octants from s.node while the cells are inner; where p's cell is an empty node, down
+  /// the grey child whose cell is nearest p (cell boxes only) to a leaf. The walk to p's own
+  /// cell is recorded (`walk`), so that the narrowed start resumes from its deepest cell that
+  /// holds the ball. Any leaf gives a valid upper bound: answers do not depend on which.
+  void located_start() {
+    if (B.best < std::numeric_limits<double>::infinity()) return;
+    std::uint32_t ni = s.node;
+    Vec3d lo = t_.root_lo, hi;
+    int level = 0;
+    if (ni != 0) {
+      t_.cell_box(nodes[ni].code, &lo, &hi);
+      level = octcode_level(nodes[ni].code);
+    }
+    const double size = t_.cell_size(level);
+    if (!(p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size))
+      return;  // p outside the subtree's cell: the descent's own order is as good
+    walk.root = s.node;
+    walk.node[0] = ni;
+    walk.lo[0] = lo;
+    walk.len = 1;
+    bool on_path = true;  // ni's cell holds p
+    while (nodes[ni].kind == NodeKind::inner) {
+      const double csz = t_.cell_size(level + 1);
+      const std::uint32_t* kids = t_.children.data() + nodes[ni].index;
+      int o = -1;
+      if (on_path) {
+        o = (p.x >= lo.x + csz ? 1 : 0) | (p.y >= lo.y + csz ? 2 : 0) | (p.z >= lo.z + csz ? 4 : 0);
+        const NodeKind k = nodes[kids[o]].kind;
+        if (k != NodeKind::inner && k != NodeKind::leaf) {
+          on_path = false;
+          o = -1;
+        }
+      }
+      if (o < 0) {  // p's cell is empty: the grey child nearest p (an inner node has one)
+        double best_d2 = std::numeric_limits<double>::infinity();
+        for (int c = 0; c < 8; ++c) {
+          const NodeKind k = nodes[kids[c]].kind;
+          if (k != NodeKind::inner && k != NodeKind::leaf) continue;
+          double d2 = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double clo = lo[a] + (((c >> a) & 1) ? csz : 0.0);
+            const double v = std::max({clo - p[a], 0.0, p[a] - (clo + csz)});
+            d2 += v * v;
+          }
+          if (d2 < best_d2) { best_d2 = d2; o = c; }
+        }
+        if (o < 0) return;
+      }
+      lo = Vec3d{lo.x + ((o & 1) ? csz : 0.0), lo.y + ((o & 2) ? csz : 0.0), lo.z + ((o & 4) ? csz : 0.0)};
+      ni = kids[o];
+      ++level;
+      ++counters.nodes_visited;
+      if (on_path) {
+        walk.node[walk.len] = ni;
+        walk.lo[walk.len] = lo;
+        ++walk.len;
+      }
+    }
+    if (nodes[ni].kind != NodeKind::leaf) return;
+    scan_node = ni;
+    scan_leaf(nodes[ni].index, leaf_hint(nodes[ni]));
+  }
+
   /// Whether the seed's node is the seed leaf's (its planes then bound the leaf's blocks).
   bool seed_node_known() const {
     return s.seed_leaf < t_.leaves.size() && s.seed_node < t_.nodes.size() &&
@@ -229,6 +295,27 @@ class Query::DistanceSearch {
     // products), so far points get the extra term, or they could lose their closest triangle.
     const double eps_p = double(lf.eps) +
                          1e-6 * (double(std::fabs(px)) + double(std::fabs(py)) + double(std::fabs(pz)));
+    if (!q_bounds_) {  // once per search, and only for a search that scans a leaf (a page's often does not)
+      for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
+      q_bounds_ = true;
+    }
+    const LeafPoint lp{li, lf, {px, py, pz}, eps_p};
+    // With no bound yet (the first leaf of a search without a seed), the block whose box is
+    // nearest p first: its triangles give a bound, so that the other blocks go through the
+    // box cull and are ordered only if they can still win, instead of all being ordered
+    // against an infinite bound.
+    std::uint32_t first = UINT32_MAX;
+    if (!(lim2 < std::numeric_limits<double>::infinity())) {
+      const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+      const BlockBox* bb = blocks + t_.leaf_block[li];
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::uint32_t j = 0; j < nb; ++j) {
+        const double d2 = box_d2(bb[j], p);
+        if (d2 < nearest) { nearest = d2; first = j; }
+      }
+      counters.planes_tested += nb;
+      if (first != UINT32_MAX) scan_block(lp, first);
+    }
     const std::uint32_t m = order_blocks(li, lf, hn);
     std::pair<double, std::uint32_t>* ord = order_.data();
     // The surviving blocks' triangles are usually cold (random points): ask for all of them now,
@@ -237,32 +324,40 @@ class Query::DistanceSearch {
       const char* a = reinterpret_cast<const char*>(tris + lf.tri_begin + ord[i].second * kBlockTris);
       for (std::uint32_t l = 0; l < kBlockTris; ++l) __builtin_prefetch(a + 64 * l);
     }
-    // A block's triangles go through the pre-filter first (8 at a time: face plane and box in
-    // float, with margins), then the per-triangle tests: the filter only clears triangles that
-    // those tests prune too (leaf_kernels.hpp), so what is tested, and every counter, is the same.
-    const LeafKernelTable& kt = leaf_kernel_table();
-    const float pl[3] = {px, py, pz};
-    if (!q_bounds_) {  // once per search, and only for a search that scans a leaf (a page's often does not)
-      for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
-      q_bounds_ = true;
-    }
-    double limits_for = -1;
-    float plane_lim = 0, box_lim = 0;
     for (std::uint32_t i = 0; i < m; ++i) {
       if (ord[i].first > lim2) break;
-      const std::uint32_t k0 = lf.tri_begin + ord[i].second * kBlockTris;
-      const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
-      counters.planes_tested += k1 - k0;
-      if (B.best != limits_for) {  // the best moved: the limits follow it
-        distance_prefilter_limits(B.best, B.best2, eps_p, &plane_lim, &box_lim);
-        limits_for = B.best;
-      }
-      for (unsigned bits = kt.distance_pass(tris + k0, k1 - k0, pl, q_lo, q_hi, plane_lim, box_lim); bits;
-           bits &= bits - 1) {
-        const std::uint32_t k = k0 + unsigned(__builtin_ctz(bits));
-        if (triangle_pruned(tris[k], px, py, pz, eps_p)) continue;
-        test_triangle(k, li);
-      }
+      if (ord[i].second != first) scan_block(lp, ord[i].second);
+    }
+  }
+
+  /// What a leaf's scan knows of p: the leaf, p in its frame, and the bound of a face-plane
+  /// value's float error there.
+  struct LeafPoint {
+    std::uint32_t li;
+    const Leaf& lf;
+    float pl[3];
+    double eps_p;
+  };
+
+  /// Block j of a leaf: its triangles go through the pre-filter first (8 at a time: face plane
+  /// and box in float, with margins), then the per-triangle tests, then the exact closest point.
+  /// The filter only clears triangles that those tests prune too (leaf_kernels.hpp), so what is
+  /// tested, and every counter, is the same.
+  void scan_block(const LeafPoint& lp, std::uint32_t j) {
+    const std::uint32_t k0 = lp.lf.tri_begin + j * kBlockTris;
+    const std::uint32_t k1 = std::min(k0 + kBlockTris, lp.lf.tri_begin + lp.lf.tri_count);
+    counters.planes_tested += k1 - k0;
+    if (B.best != limits_for_ || lp.eps_p != limits_eps_) {  // the best moved, or the leaf: the limits follow
+      distance_prefilter_limits(B.best, B.best2, lp.eps_p, &plane_lim_, &box_lim_);
+      limits_for_ = B.best;
+      limits_eps_ = lp.eps_p;
+    }
+    const LeafKernelTable& kt = leaf_kernel_table();
+    for (unsigned bits = kt.distance_pass(tris + k0, k1 - k0, lp.pl, q_lo, q_hi, plane_lim_, box_lim_); bits;
+         bits &= bits - 1) {
+      const std::uint32_t k = k0 + unsigned(__builtin_ctz(bits));
+      if (triangle_pruned(tris[k], lp.pl[0], lp.pl[1], lp.pl[2], lp.eps_p)) continue;
+      test_triangle(k, lp.li);
     }
   }
 
@@ -518,6 +613,10 @@ class Query::DistanceSearch {
   float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
   float q_lo[3], q_hi[3];        ///< p rounded outwards to float (the triangle pre-filter's boxes)
   bool q_bounds_ = false;        ///< q_lo, q_hi computed
+  // the triangle pre-filter's limits (distance_prefilter_limits), for the best and the leaf
+  // (eps_p) they were computed for
+  double limits_for_ = -1, limits_eps_ = -1;
+  float plane_lim_ = 0, box_lim_ = 0;
   double slack = 0;
   std::uint32_t scan_node = UINT32_MAX;  ///< the node of the leaf being scanned, if known
 };
@@ -603,6 +702,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   } else {
     search.coherent_start();
   }
+  search.located_start();
   search.descend();
   if (near) gather_distance_near(p, search.ball_radius());
 }

@@ -48,7 +48,9 @@ TEST(EbpQuery, DistanceMatchesReference) {
 }
 
 // The answer is the brute-force lexicographic minimum of (squared distance, triangle index),
-// bit for bit, near and far from the surface, coherent or not.
+// bit for bit, near and far from the surface, on the boundaries of leaf cells (where the located
+// start picks one side), in empty cells and outside the root (where it dives or stands aside),
+// coherent or not.
 TEST(EbpQuery, DistanceIsTheLexicographicMinimumBitForBit) {
   for (const char* name : {"cow.obj", "fandisk.obj"}) {
     const Mesh m = bvhbench::load_mesh(shared_mesh(name));
@@ -61,6 +63,12 @@ TEST(EbpQuery, DistanceIsTheLexicographicMinimumBitForBit) {
     for (int i = 0; i < 100; ++i) {  // far points
       const Vec3d e = bb.extent();
       pts.push_back({bb.lo.x + u(rng) * e.x, bb.lo.y + u(rng) * e.y, bb.lo.z + u(rng) * e.z});
+    }
+    for (std::size_t i = 0; i < t.nodes.size(); i += 3) {  // corners and face centres of cells
+      Vec3d lo, hi;
+      t.cell_box(t.nodes[i].code, &lo, &hi);
+      pts.push_back(lo);
+      pts.push_back({0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), lo.z});
     }
     for (bool coherent : {false, true}) {
       Query q(t, coherent);
