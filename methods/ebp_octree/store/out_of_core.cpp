@@ -101,6 +101,22 @@ bool OutOfCore::inside_frame(const Vec3d& p) {
   return cache_.get(top_[i].index).query->inside(p);
 }
 
+std::uint32_t OutOfCore::page_on_path(const Vec3d& p) {
+  Vec3d lo = root_lo_;
+  double size = root_size_;
+  if (!(p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size))
+    return UINT32_MAX;
+  std::uint32_t i = 0;
+  while (top_[i].kind == TopKind::inner) {
+    size *= 0.5;
+    const int o = (p.x >= lo.x + size ? 1 : 0) | (p.y >= lo.y + size ? 2 : 0) | (p.z >= lo.z + size ? 4 : 0);
+    lo = Vec3d{lo.x + ((o & 1) ? size : 0.0), lo.y + ((o & 2) ? size : 0.0), lo.z + ((o & 4) ? size : 0.0)};
+    i = top_children_[top_[i].index + std::uint32_t(o)];
+    ++top_counters_.nodes_visited;
+  }
+  return top_[i].kind == TopKind::page ? top_[i].index : UINT32_MAX;
+}
+
 namespace {
 struct TopItem {
   Vec3d lo;
@@ -166,6 +182,13 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
   if (coherent_ && last_page_ != UINT32_MAX) {
     visit_page(last_page_);
     if (bst.b.near_certified) return;  // the previous page's near set holds the ball: no other page can win
+  }
+  // The located start (as the in-memory search's): with no bound yet, the page on p's own path
+  // first, whose own search starts from p's leaf, so that the top tree is descended with a tight
+  // bound instead of weighing every child against an infinite one.
+  if (!(bst.b.best < std::numeric_limits<double>::infinity())) {
+    const std::uint32_t page = page_on_path(p);
+    if (page != UINT32_MAX) visit_page(page);
   }
 
   const Vec3d pr = p - root_centre_;

@@ -74,6 +74,9 @@ class OutOfCore {
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
   /// The branch and bound over the top tree and the pages, from the running best in `b`.
   void search(const Vec3d& p, Best& b);
+  /// The page whose cell holds p, down p's octants of the top tree; UINT32_MAX where p's top
+  /// cell is empty or p is outside the root.
+  std::uint32_t page_on_path(const Vec3d& p);
   DistanceAnswer searched_distance(const Vec3d& p);
   DistanceAnswer certified_distance(const Vec3d& p);
 };
