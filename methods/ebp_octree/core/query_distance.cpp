@@ -3,6 +3,9 @@
 // DistanceSearch, in the steps the algorithm takes:
 //   the coherent start   the previous closest triangle and its leaf, so that the bound is tight
 //                        before the descent;
+//   the near start       (coherent) the path's near set, when it holds the ball: the whole search;
+//   the located start    (no bound yet) the leaf on p's own path, so that the bound is tight
+//                        before the descent;
 //   the narrowed start   the deepest node on p's path whose cell holds the ball (p, best + tol);
 //   the descent          nodes popped nearest first, pruned by node_bound (cell box, geometry
 //                        box, planes, plane and bounding sphere together);
