@@ -36,6 +36,8 @@ def test_contact_rows_per_band_and_speed(tmp_path):
     sidecar(out, "cow", "haptic-n20000-s1", "haptic", {"band_mm": 0.5, "slide_speed": 0.1})
     result(out, "cow", "haptic", "haptic-n20000-s1", "distance", "ebp_octree:coherent=true", 3e6)
     result(out, "cow", "haptic", "haptic-n20000-s1", "distance", "embree:coherent=true", 1e6)
+    result(out, "cow", "haptic", "haptic-n20000-s1", "distance", "ebp_octree", 1.5e6)
+    result(out, "cow", "haptic", "haptic-n20000-s1", "distance", "embree", 1e6)
     # Two contact paths: their labels differ only by the parameters' hash.
     sidecar(out, "cow", "contact-n20000-s1-aaaa", "contact", {"band_mm": 0.05, "slide_speed": 0.1})
     sidecar(out, "cow", "contact-n20000-s1-bbbb", "contact", {"band_mm": 0.5, "slide_speed": 0.3})
@@ -55,5 +57,6 @@ def test_contact_rows_per_band_and_speed(tmp_path):
     assert rows[0].startswith("| cow | 0.05 | 0.1 | 4.00 M | 5.00 M | 1.00 M | 5.00× ✔ | 0.50× ✘ |"), rows[0]
     # Band 0.5 at 0.3 m/s: 1 M against 2 M; no run without coherence.
     assert rows[1].startswith("| cow | 0.5 | 0.3 | 1.00 M | 500 k | 2.00 M | 0.50× ✘ | — |"), rows[1]
-    # The haptic row is the haptic path's alone (3x), not mixed with a contact path's.
-    assert any(line.startswith("| cow (1,000) | 3.00 M |") and "3.00× ✔" in line for line in lines), p.stdout
+    # The haptic row is the haptic path's alone (3x), not mixed with a contact path's; then the
+    # haptic path without coherence (1.5x), beside it.
+    assert any(line.startswith("| cow (1,000) | 3.00 M |") and "| 3.00× ✔ | 1.50× ✔ |" in line for line in lines), p.stdout
