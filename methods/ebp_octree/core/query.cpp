@@ -21,6 +21,7 @@ Query::Query(const Octree& tree, bool coherent)
   std::uint32_t mb = 0;
   for (const Leaf& lf : t_.leaves) mb = std::max(mb, (lf.tri_count + kBlockTris - 1) / kBlockTris);
   order_.resize(mb);
+  block_d2_.resize(mb);
 }
 
 Query::~Query() = default;

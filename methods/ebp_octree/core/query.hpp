@@ -187,9 +187,11 @@ class Query {
   // Query sees only its own searches) and their count when the current set was gathered
   std::uint64_t path_queries_ = 0, dnear_gathered_at_ = 0;
   std::uint32_t dnear_backoff_ = 0;
-  // distance: leaves already scanned by this query, scratch for the block order
+  // distance: leaves already scanned by this query, scratch for the block order and for the
+  // blocks' box distances (the located start's leaf)
   std::vector<std::uint32_t> leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>> order_;
+  std::vector<double> block_d2_;
   // coherent distance: the certificate, the probe's steps and the previous sign
   bool certificate_ = true, chained_sign_ = true;
   std::unique_ptr<CertifiedPath> path_;

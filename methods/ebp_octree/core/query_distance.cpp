@@ -65,7 +65,7 @@ class Query::DistanceSearch {
  public:
   DistanceSearch(Query& q, const Vec3d& p, DistanceBest& B, const DistanceStart& s)
       : p(p), B(B), s(s), t_(q.t_), counters(q.counters), walk(q.walk_), stamp_(q.stamp_), leaf_stamp_(q.leaf_stamp_),
-        order_(q.order_), qid(q.query_id_), tris(t_.tris.data()), key_of(s.key_of), leaves(t_.leaves.data()),
+        order_(q.order_), block_d2_(q.block_d2_), qid(q.query_id_), tris(t_.tris.data()), key_of(s.key_of), leaves(t_.leaves.data()),
         blocks(t_.blocks.data()), planes(t_.planes.data()), nodes(t_.nodes.data()), nbox(t_.node_box.data()) {
     // Box bounds (blocks, nodes) are compared with `tol` added to the best distance (search_tol).
     tol = search_tol(p, t_.root_lo, t_.root_size);
@@ -308,18 +308,21 @@ class Query::DistanceSearch {
     // box cull and are ordered only if they can still win, instead of all being ordered
     // against an infinite bound.
     std::uint32_t first = UINT32_MAX;
+    const double* pre_d2 = nullptr;
     if (!(lim2 < std::numeric_limits<double>::infinity())) {
       const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
       const BlockBox* bb = blocks + t_.leaf_block[li];
+      double* d2s = block_d2_.data();
       double nearest = std::numeric_limits<double>::infinity();
       for (std::uint32_t j = 0; j < nb; ++j) {
-        const double d2 = box_d2(bb[j], p);
-        if (d2 < nearest) { nearest = d2; first = j; }
+        d2s[j] = box_d2(bb[j], p);
+        if (d2s[j] < nearest) { nearest = d2s[j]; first = j; }
       }
       counters.planes_tested += nb;
       if (first != UINT32_MAX) scan_block(lp, first);
+      pre_d2 = d2s;  // the other blocks are ordered from these distances: no second pass
     }
-    const std::uint32_t m = order_blocks(li, lf, hn);
+    const std::uint32_t m = order_blocks(li, lf, hn, pre_d2, first);
     std::pair<double, std::uint32_t>* ord = order_.data();
     // The surviving blocks' triangles are usually cold (random points): ask for all of them now,
     // so that the misses overlap instead of being paid one block after the other.
@@ -329,7 +332,7 @@ class Query::DistanceSearch {
     }
     for (std::uint32_t i = 0; i < m; ++i) {
       if (ord[i].first > lim2) break;
-      if (ord[i].second != first) scan_block(lp, ord[i].second);
+      scan_block(lp, ord[i].second);
     }
   }
 
@@ -365,12 +368,46 @@ class Query::DistanceSearch {
   }
 
   /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
-  /// ascending (bound, block): a deterministic order. Returns how many.
-  std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn) {
+  /// ascending (bound, block): a deterministic order. Returns how many. `pre_d2`, if given, holds
+  /// every block's squared box distance already (the located start's first pass), and block
+  /// `skip` is left out (scanned already).
+  std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn, const double* pre_d2 = nullptr,
+                             std::uint32_t skip = UINT32_MAX) {
     const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
     const BlockBox* bb = blocks + t_.leaf_block[li];
     std::pair<double, std::uint32_t>* ord = order_.data();
     std::uint32_t m = 0;
+    auto consider = [&](std::uint32_t j, double d2) {
+      if (d2 > lim2) return;
+      if (hn.h > 0) {
+        // The leaf's plane and the block box's bounding sphere (as node_bound does for nodes):
+        // a bound of the distance to the block's triangles within this leaf's cell, which is
+        // all this leaf stands for.
+        const BlockBox& x = bb[j];
+        const double ex = double(x.hi[0]) - double(x.lo[0]), ey = double(x.hi[1]) - double(x.lo[1]),
+                     ez = double(x.hi[2]) - double(x.lo[2]);
+        const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez) * (1.0 + 1e-12);
+        const double qx = p.x - 0.5 * (double(x.lo[0]) + double(x.hi[0])), qy = p.y - 0.5 * (double(x.lo[1]) + double(x.hi[1])),
+                     qz = p.z - 0.5 * (double(x.lo[2]) + double(x.hi[2]));
+        const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * hn.n[0] + qy * hn.n[1] + qz * hn.n[2];
+        const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6, as for triangles
+        if (tan2 > rho * rho) {
+          const double tl = std::sqrt(tan2) - rho;
+          const double cb = std::sqrt(hn.h * hn.h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol);
+          if (cb > 0) d2 = std::max(d2, cb * cb);
+          if (d2 > lim2) return;
+        }
+      }
+      // insertion, ascending (distance, block): a deterministic order
+      std::uint32_t i = m++;
+      while (i > 0 && ord[i - 1].first > d2) { ord[i] = ord[i - 1]; --i; }
+      ord[i] = {d2, j};
+    };
+    if (pre_d2) {
+      for (std::uint32_t j = 0; j < nb; ++j)
+        if (j != skip) consider(j, pre_d2[j]);
+      return m;
+    }
     counters.planes_tested += nb;
     // With a finite best, the blocks first go 8 at a time through the block-box kernel against
     // the box of the ball (p, best + tol) rounded outwards to float: a block outside it is
@@ -393,31 +430,7 @@ class Query::DistanceSearch {
       for (unsigned live = cull ? kt.block_pass(bb + j0, w, ball_lo, ball_hi) : (1u << w) - 1; live;
            live &= live - 1) {
         const std::uint32_t j = j0 + unsigned(__builtin_ctz(live));
-        double d2 = box_d2(bb[j], p);
-        if (d2 > lim2) continue;
-        if (hn.h > 0) {
-          // The leaf's plane and the block box's bounding sphere (as node_bound does for nodes):
-          // a bound of the distance to the block's triangles within this leaf's cell, which is
-          // all this leaf stands for.
-          const BlockBox& x = bb[j];
-          const double ex = double(x.hi[0]) - double(x.lo[0]), ey = double(x.hi[1]) - double(x.lo[1]),
-                       ez = double(x.hi[2]) - double(x.lo[2]);
-          const double rho = 0.5 * std::sqrt(ex * ex + ey * ey + ez * ez) * (1.0 + 1e-12);
-          const double qx = p.x - 0.5 * (double(x.lo[0]) + double(x.hi[0])), qy = p.y - 0.5 * (double(x.lo[1]) + double(x.hi[1])),
-                       qz = p.z - 0.5 * (double(x.lo[2]) + double(x.hi[2]));
-          const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * hn.n[0] + qy * hn.n[1] + qz * hn.n[2];
-          const double tan2 = q2 - qn * qn * (1.0 + 1e-6);  // |n|^2 >= 1 - 1e-6, as for triangles
-          if (tan2 > rho * rho) {
-            const double tl = std::sqrt(tan2) - rho;
-            const double cb = std::sqrt(hn.h * hn.h + tl * tl) - (1e-6 * (std::sqrt(q2) + rho) + tol);
-            if (cb > 0) d2 = std::max(d2, cb * cb);
-            if (d2 > lim2) continue;
-          }
-        }
-        // insertion, ascending (distance, block): a deterministic order
-        std::uint32_t i = m++;
-        while (i > 0 && ord[i - 1].first > d2) { ord[i] = ord[i - 1]; --i; }
-        ord[i] = {d2, j};
+        consider(j, box_d2(bb[j], p));
       }
     }
     return m;
@@ -603,6 +616,7 @@ class Query::DistanceSearch {
   std::vector<std::uint32_t>& stamp_;
   std::vector<std::uint32_t>& leaf_stamp_;
   std::vector<std::pair<double, std::uint32_t>>& order_;
+  std::vector<double>& block_d2_;
   const std::uint32_t qid;
   const LeafTri* const tris;
   const std::uint32_t* const key_of;
