@@ -319,7 +319,24 @@ class Query::DistanceSearch {
         if (d2s[j] < nearest) { nearest = d2s[j]; first = j; }
       }
       counters.planes_tested += nb;
-      if (first != UINT32_MAX) scan_block(lp, first);
+      if (first != UINT32_MAX) {
+        // In it, the triangle whose vertices' mean is nearest p first: the bound its exact test
+        // gives lets the block's pre-filter clear most of the others.
+        const std::uint32_t k0 = lf.tri_begin + first * kBlockTris;
+        const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
+        const float c3[3] = {float(3.0 * p.x), float(3.0 * p.y), float(3.0 * p.z)};
+        std::uint32_t kn = k0;
+        float dn = std::numeric_limits<float>::infinity();
+        for (std::uint32_t k = k0; k < k1; ++k) {
+          const LeafTri& t = tris[k];
+          const float x = t.a[0] + t.b[0] + t.c[0] - c3[0], y = t.a[1] + t.b[1] + t.c[1] - c3[1],
+                      z = t.a[2] + t.b[2] + t.c[2] - c3[2];
+          const float d = x * x + y * y + z * z;
+          if (d < dn) { dn = d; kn = k; }
+        }
+        test_triangle(kn, li);
+        scan_block(lp, first);
+      }
       pre_d2 = d2s;  // the other blocks are ordered from these distances: no second pass
     }
     const std::uint32_t m = order_blocks(li, lf, hn, pre_d2, first);
