@@ -324,17 +324,7 @@ class Query::DistanceSearch {
         // gives lets the block's pre-filter clear most of the others.
         const std::uint32_t k0 = lf.tri_begin + first * kBlockTris;
         const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
-        const float c3[3] = {float(3.0 * p.x), float(3.0 * p.y), float(3.0 * p.z)};
-        std::uint32_t kn = k0;
-        float dn = std::numeric_limits<float>::infinity();
-        for (std::uint32_t k = k0; k < k1; ++k) {
-          const LeafTri& t = tris[k];
-          const float x = t.a[0] + t.b[0] + t.c[0] - c3[0], y = t.a[1] + t.b[1] + t.c[1] - c3[1],
-                      z = t.a[2] + t.b[2] + t.c[2] - c3[2];
-          const float d = x * x + y * y + z * z;
-          if (d < dn) { dn = d; kn = k; }
-        }
-        test_triangle(kn, li);
+        test_triangle(k0 + nearest_mean(k0, (1u << (k1 - k0)) - 1), li);
         scan_block(lp, first);
       }
       pre_d2 = d2s;  // the other blocks are ordered from these distances: no second pass
@@ -382,6 +372,23 @@ class Query::DistanceSearch {
       if (triangle_pruned(tris[k], lp.pl[0], lp.pl[1], lp.pl[2], lp.eps_p)) continue;
       test_triangle(k, lp.li);
     }
+  }
+
+  /// Of the triangles k0 + i (i in `mask`), the one whose vertices' mean is nearest p, as its
+  /// offset i (float: a choice of order, not a bound).
+  unsigned nearest_mean(std::uint32_t k0, unsigned mask) const {
+    const float c3[3] = {float(3.0 * p.x), float(3.0 * p.y), float(3.0 * p.z)};
+    unsigned best_i = unsigned(__builtin_ctz(mask));
+    float dn = std::numeric_limits<float>::infinity();
+    for (; mask; mask &= mask - 1) {
+      const unsigned i = unsigned(__builtin_ctz(mask));
+      const LeafTri& t = tris[k0 + i];
+      const float x = t.a[0] + t.b[0] + t.c[0] - c3[0], y = t.a[1] + t.b[1] + t.c[1] - c3[1],
+                  z = t.a[2] + t.b[2] + t.c[2] - c3[2];
+      const float d = x * x + y * y + z * z;
+      if (d < dn) { dn = d; best_i = i; }
+    }
+    return best_i;
   }
 
   /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
