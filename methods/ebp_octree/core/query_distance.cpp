@@ -303,10 +303,10 @@ class Query::DistanceSearch {
       q_bounds_ = true;
     }
     const LeafPoint lp{li, lf, {px, py, pz}, eps_p};
-    // With no bound yet (the first leaf of a search without a seed), the block whose box is
-    // nearest p first: its triangles give a bound, so that the other blocks go through the
-    // box cull and are ordered only if they can still win, instead of all being ordered
-    // against an infinite bound.
+    // With no bound yet (the first leaf of a search without a seed), one pass of box distances,
+    // then the block whose box is nearest p first: its triangles give a bound, so that the
+    // other blocks, ordered from the same distances, are taken only if they can still win,
+    // instead of all being ordered against an infinite bound.
     std::uint32_t first = UINT32_MAX;
     const double* pre_d2 = nullptr;
     if (!(lim2 < std::numeric_limits<double>::infinity())) {
