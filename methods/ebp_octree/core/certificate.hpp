@@ -34,33 +34,36 @@ inline constexpr double kGrowth = 2.0;
 /// The path's choice between certificates and plain searches is made on *work units*, a proxy of
 /// instructions from the query's own counters (input alone sets them, so the choice is the same
 /// on every machine): in a search an exact triangle test ~220 instructions, a plane, box or
-/// triangle pre-test ~40, a node ~80, a near set's member compared with the ball ~4 and a near
-/// set gathered ~2,500 (callgrind, the 1M bunny's contact path: 2,300 instructions a gathering);
-/// in a certificate's scan a member's 8-wide bound ~6.
+/// triangle pre-test ~40, a node ~80, a near set's member compared with the ball ~4, a search the
+/// near set served ~300 besides those (its ball's box, the candidates' order, the seed's
+/// bookkeeping: callgrind, the 1M bunny's contact path, ~630 instructions a served search) and a
+/// near set gathered ~2,500 (the same path: 2,300 instructions a gathering); in a certificate's
+/// scan a member's 8-wide bound ~6.
 struct Work {
-  std::uint64_t triangles = 0, planes = 0, nodes = 0, near_tested = 0, near_gathered = 0;
+  std::uint64_t triangles = 0, planes = 0, nodes = 0, near_tested = 0, near_gathered = 0, near_served = 0;
   Work& operator+=(const Work& o) {
     triangles += o.triangles;
     planes += o.planes;
     nodes += o.nodes;
     near_tested += o.near_tested;
     near_gathered += o.near_gathered;
+    near_served += o.near_served;
     return *this;
   }
   friend Work operator+(Work a, const Work& b) { return a += b; }
   /// The work done between two readings of the same counters (b after a).
   friend Work operator-(const Work& b, const Work& a) {
-    return {b.triangles - a.triangles, b.planes - a.planes, b.nodes - a.nodes, b.near_tested - a.near_tested,
-            b.near_gathered - a.near_gathered};
+    return {b.triangles - a.triangles, b.planes - a.planes, b.nodes - a.nodes,
+            b.near_tested - a.near_tested, b.near_gathered - a.near_gathered, b.near_served - a.near_served};
   }
 };
 inline Work work_of(const QueryCounters& c) {
-  return {c.triangles_tested, c.planes_tested, c.nodes_visited, c.near_tested, c.near_gathered};
+  return {c.triangles_tested, c.planes_tested, c.nodes_visited, c.near_tested, c.near_gathered, c.near_served};
 }
 inline double search_work(const Work& a, const Work& b) {
   const Work d = b - a;
   return 220.0 * double(d.triangles) + 40.0 * double(d.planes) + 80.0 * double(d.nodes) +
-         4.0 * double(d.near_tested) + 2500.0 * double(d.near_gathered);
+         4.0 * double(d.near_tested) + 2500.0 * double(d.near_gathered) + 300.0 * double(d.near_served);
 }
 inline double scan_work(const Work& a, const Work& b) {
   const Work d = b - a;

@@ -44,7 +44,7 @@ void Query::reset_path() {
   dnear_backoff_ = 0;
   dnear_scale_ = 1.0;
   dnear_served_ = dnear_losses_ = 0;
-  dnear_tried_ = false;
+  dnear_tried_ = dnear_first_ = false;
   walk_.root = UINT32_MAX;  // a new path walks from the root again: each pass counts the same work
 }
 

@@ -173,7 +173,7 @@ class Query {
   // gathering's ball (p, best) grown by the probe's step; a search whose ball lies in that box
   // tests only the members the ball's box meets, with no descent (DESIGN.md, "Distance in
   // contact"). A cache of the tree's own triangles: answers do not depend on it.
-  void gather_distance_near(const Vec3d& p, double r);
+  bool gather_distance_near(const Vec3d& p, double r, bool first);
   std::unique_ptr<NearSet> dnear_;
   bool dprev_ok_ = false;
   Vec3d dprev_p_;
@@ -183,6 +183,7 @@ class Query {
   double dnear_scale_ = 1.0;
   std::uint32_t dnear_served_ = 0, dnear_losses_ = 0;
   bool dnear_tried_ = false;
+  bool dnear_first_ = false;  ///< the current set was gathered before its search's tree search (and served it)
   // queries of the path so far (in-memory unsigned_distance calls; an out-of-core page's
   // Query sees only its own searches) and their count when the current set was gathered
   std::uint64_t path_queries_ = 0, dnear_gathered_at_ = 0;

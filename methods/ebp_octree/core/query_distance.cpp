@@ -729,6 +729,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
   // renewal's collection, whose prune radius is the collector's).
   B.near_certified = false;
   const bool near = coherent_ && s.near && !B.collect;
+  bool gathered_first = false;
   if (near) {
     dmove_ = dprev_ok_ ? p - dprev_p_ : Vec3d(0, 0, 0);
     dprev_p_ = p;
@@ -739,13 +740,24 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
       B.near_certified = true;
       return;
     }
+    // Not held, while the path's sets serve (the last one served a search besides the one it
+    // was gathered for): a new set about the seed's ball (the previous closest triangle bounds
+    // this search's distance, so the ball holds the answer), and the search from it, before
+    // any tree search. Otherwise (the path's first sets, or sets that did not serve: far from
+    // the surface, or jumping) the tree search first, and a set about its ball after it.
+    gathered_first = dnear_served_ > (dnear_first_ ? 1u : 0u);
+    if (gathered_first && gather_distance_near(p, search.ball_radius(), true) && search.near_start(*dnear_)) {
+      ++dnear_served_;
+      B.near_certified = true;
+      return;
+    }
     search.seed_leaf();
   } else {
     search.coherent_start();
   }
   search.located_start();
   search.descend();
-  if (near) gather_distance_near(p, search.ball_radius());
+  if (near && !gathered_first) gather_distance_near(p, search.ball_radius(), false);
 }
 
 // A near set for the next searches of the path: a cube of half-width r + scale x (kNearBall x r
@@ -762,42 +774,47 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // set for 8 searches, doubling while the losses go on (up to 256) — a path far from the surface,
 // sliding fast, or on triangles so small that no set of kNearMax holds the next ball, where the
 // tree's search alone is cheaper. Attempts that fail count as gatherings.
-void Query::gather_distance_near(const Vec3d& p, double r) {
+bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
   constexpr double kNearBall = 2.0, kNearSteps = 4.0, kNearAhead = 3.0, kMinScale = 1.0 / 64;
   constexpr std::uint32_t kNearLosses = 3, kNearBackoff = 8, kNearBackoffMax = 256;
   if (dnear_backoff_ > 0) {
     --dnear_backoff_;
-    return;
+    return false;
   }
-  if (!(r < std::numeric_limits<double>::infinity())) return;
+  if (!(r < std::numeric_limits<double>::infinity())) return false;
   // The last set's outcome (after a pause, the next set is tried first). A set that other
   // queries interrupted (certificates answered them) was not given its chance: no loss.
   const bool interrupted = path_queries_ - dnear_gathered_at_ > 1 + dnear_served_;
   if (dnear_tried_ && !interrupted) {
-    dnear_losses_ = dnear_served_ == 0 ? dnear_losses_ + 1 : 0;
+    // (a set gathered first serves the search it was gathered for: a loss if it served no other)
+    dnear_losses_ = dnear_served_ <= (dnear_first_ ? 1u : 0u) ? dnear_losses_ + 1 : 0;
     if (dnear_losses_ >= kNearLosses) {
       dnear_backoff_ = std::min(kNearBackoffMax, kNearBackoff << std::min<std::uint32_t>(dnear_losses_ - kNearLosses, 5));
       if (dnear_) dnear_->valid = false;
       dnear_tried_ = false;
-      return;
+      return false;
     }
   }
   dnear_served_ = 0;
   dnear_tried_ = true;
+  dnear_first_ = first;
   dnear_gathered_at_ = path_queries_;
   const double step = std::max({std::fabs(dmove_.x), std::fabs(dmove_.y), std::fabs(dmove_.z)});
   NearSet& ns = allocated(dnear_);
   for (const double part : {1.0, 0.25}) {
     const double h = r + part * dnear_scale_ * (kNearBall * r + kNearSteps * step);
-    const Vec3d c = p + dmove_ * (part * kNearAhead);
+    // ahead of p, but not so far that the box stops holding the ball (p, r) of this search
+    Vec3d c = p;
+    for (int a = 0; a < 3; ++a) c[a] += std::clamp(dmove_[a] * (part * kNearAhead), r - h, h - r);
     ++counters.near_gathered;
     if (ns.gather(t_, c - Vec3d(h, h, h), c + Vec3d(h, h, h), UINT32_MAX, true)) {
       if (ns.n < kNearMax / 4) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
-      return;
+      return true;
     }
     if (ns.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
   }
   dnear_backoff_ = kNearBackoff;
+  return false;
 }
 
 DistanceAnswer Query::distance(const Vec3d& p) {
