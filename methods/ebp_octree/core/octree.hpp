@@ -26,6 +26,7 @@
 ///   leaves   : one record per grey leaf (reference point and its colour, triangle block).
 ///   tris     : per-leaf triangle blocks, 64 bytes (one cache line) per reference: inline float
 ///              coordinates, the face plane in the leaf's frame and the input triangle index.
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -146,5 +147,31 @@ class Octree {
   /// Index of the node whose cell holds leaf-grid cell (x, y, z) (a leaf or an empty node).
   std::uint32_t locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
 };
+
+// Cell geometry in double, as the searches walk it (the cell boundaries are exact doubles, "The
+// frame" in DESIGN.md, so these are exact): a cube's corner `lo`, its children's edge `half`.
+
+/// The octant (x | y << 1 | z << 2, the `children` order) of the child whose cell holds p (a
+/// point on a boundary goes to the upper side).
+inline int child_octant(const Vec3d& p, const Vec3d& lo, double half) {
+  return (p.x >= lo.x + half ? 1 : 0) | (p.y >= lo.y + half ? 2 : 0) | (p.z >= lo.z + half ? 4 : 0);
+}
+/// The corner of child octant o.
+inline Vec3d child_corner(const Vec3d& lo, double half, int o) {
+  return {lo.x + ((o & 1) ? half : 0.0), lo.y + ((o & 2) ? half : 0.0), lo.z + ((o & 4) ? half : 0.0)};
+}
+/// Whether the closed cube [lo, lo + size] holds p.
+inline bool cell_contains(const Vec3d& lo, double size, const Vec3d& p) {
+  return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size;
+}
+/// The squared distance from p to the cube [lo, lo + size] (0 inside).
+inline double cell_d2(const Vec3d& lo, double size, const Vec3d& p) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
+    d2 += v * v;
+  }
+  return d2;
+}
 
 }  // namespace ebp

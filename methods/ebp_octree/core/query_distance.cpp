@@ -119,7 +119,7 @@ class Query::DistanceSearch {
       level = octcode_level(nodes[ni].code);
     }
     const double size = t_.cell_size(level);
-    if (!(p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size))
+    if (!cell_contains(lo, size, p))
       return;  // p outside the subtree's cell: the descent's own order is as good
     walk.root = s.node;
     walk.node[0] = ni;
@@ -131,7 +131,7 @@ class Query::DistanceSearch {
       const std::uint32_t* kids = t_.children.data() + nodes[ni].index;
       int o = -1;
       if (on_path) {
-        o = (p.x >= lo.x + csz ? 1 : 0) | (p.y >= lo.y + csz ? 2 : 0) | (p.z >= lo.z + csz ? 4 : 0);
+        o = child_octant(p, lo, csz);
         const NodeKind k = nodes[kids[o]].kind;
         if (k != NodeKind::inner && k != NodeKind::leaf) {
           on_path = false;
@@ -143,17 +143,12 @@ class Query::DistanceSearch {
         for (int c = 0; c < 8; ++c) {
           const NodeKind k = nodes[kids[c]].kind;
           if (k != NodeKind::inner && k != NodeKind::leaf) continue;
-          double d2 = 0;
-          for (int a = 0; a < 3; ++a) {
-            const double clo = lo[a] + (((c >> a) & 1) ? csz : 0.0);
-            const double v = std::max({clo - p[a], 0.0, p[a] - (clo + csz)});
-            d2 += v * v;
-          }
+          const double d2 = cell_d2(child_corner(lo, csz, c), csz, p);
           if (d2 < best_d2) { best_d2 = d2; o = c; }
         }
         if (o < 0) return;
       }
-      lo = Vec3d{lo.x + ((o & 1) ? csz : 0.0), lo.y + ((o & 2) ? csz : 0.0), lo.z + ((o & 4) ? csz : 0.0)};
+      lo = child_corner(lo, csz, o);
       ni = kids[o];
       ++level;
       ++counters.nodes_visited;
@@ -244,7 +239,7 @@ class Query::DistanceSearch {
         const std::uint32_t ci = t_.children[nd.index + std::uint32_t(o)];
         const Node& cn = nodes[ci];
         if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
-        const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+        const Vec3d lo = child_corner(Vec3d{it.lo.x, it.lo.y, it.lo.z}, csz, o);
         const double b = node_bound(ci, lo, csz);
         if (b > B.best) continue;
         kids[nk++] = {corner(lo), b, ci, cl};
@@ -529,11 +524,7 @@ class Query::DistanceSearch {
   /// A node's lower bound: its cell box, then the box of its geometry, then its planes; each
   /// stage only when the previous ones do not already prune it.
   double node_bound(std::uint32_t ni, const Vec3d& lo, double size) {
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
-      d2 += v * v;
-    }
+    const double d2 = cell_d2(lo, size, p);
     double b = d2 > 0 ? std::sqrt(d2) : 0.0;
     if (b > B.best) return b;  // pruned by the box alone: the planes could only raise the bound
     const double g2 = box_d2(nbox[ni], p);
@@ -618,8 +609,8 @@ class Query::DistanceSearch {
         walk.len = depth + 1;
         while (nodes[start].kind == NodeKind::inner) {
           const double csz = t_.cell_size(level + 1);
-          const int o = (p.x >= lo.x + csz ? 1 : 0) | (p.y >= lo.y + csz ? 2 : 0) | (p.z >= lo.z + csz ? 4 : 0);
-          const Vec3d clo{lo.x + ((o & 1) ? csz : 0.0), lo.y + ((o & 2) ? csz : 0.0), lo.z + ((o & 4) ? csz : 0.0)};
+          const int o = child_octant(p, lo, csz);
+          const Vec3d clo = child_corner(lo, csz, o);
           const std::uint32_t ci = t_.children[nodes[start].index + std::uint32_t(o)];
           const NodeKind ck = nodes[ci].kind;
           if ((ck != NodeKind::inner && ck != NodeKind::leaf) || !holds(clo, csz)) break;
@@ -775,11 +766,12 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // 1,059 / 1,048 / 1,261, and at 0.3 m/s 0 / 3 / 4: 2,249 / 2,121 / 2,430). A box that meets
 // too many triangles or leaf cells gets a second attempt at a quarter of the growth and offset
 // at once; the scale is the path's: halved when a box meets too many triangles (small
-// triangles), doubled back (up to 1) when a set is less than a quarter full. A set that served
-// no search before the next gathering was a loss: after kNearLosses in a row the path gathers no
-// set for 8 searches, doubling while the losses go on (up to 256) — a path far from the surface,
-// sliding fast, or on triangles so small that no set of kNearMax holds the next ball, where the
-// tree's search alone is cheaper. Attempts that fail count as gatherings.
+// triangles), doubled back (up to 1) when a set is less than a quarter full. A set gathered
+// first (distance_bound) is kept around the ball (p, r), which it then serves; a set that served
+// no search besides that one before the next gathering was a loss: after kNearLosses in a row
+// the path gathers no set for 8 searches, doubling while the losses go on (up to 256) — a path
+// far from the surface, sliding fast, or on triangles so small that no set of kNearMax holds the
+// next ball, where the tree's search alone is cheaper. Attempts that fail count as gatherings.
 bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
   constexpr double kNearBall = 2.0, kNearSteps = 4.0, kNearAhead = 3.0, kMinScale = 1.0 / 64;
   constexpr std::uint32_t kNearLosses = 3, kNearBackoff = 8, kNearBackoffMax = 256;

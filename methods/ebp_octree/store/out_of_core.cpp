@@ -104,13 +104,13 @@ bool OutOfCore::inside_frame(const Vec3d& p) {
 std::uint32_t OutOfCore::page_on_path(const Vec3d& p) {
   Vec3d lo = root_lo_;
   double size = root_size_;
-  if (!(p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size))
+  if (!cell_contains(lo, size, p))
     return UINT32_MAX;
   std::uint32_t i = 0;
   while (top_[i].kind == TopKind::inner) {
     size *= 0.5;
-    const int o = (p.x >= lo.x + size ? 1 : 0) | (p.y >= lo.y + size ? 2 : 0) | (p.z >= lo.z + size ? 4 : 0);
-    lo = Vec3d{lo.x + ((o & 1) ? size : 0.0), lo.y + ((o & 2) ? size : 0.0), lo.z + ((o & 4) ? size : 0.0)};
+    const int o = child_octant(p, lo, size);
+    lo = child_corner(lo, size, o);
     i = top_children_[top_[i].index + std::uint32_t(o)];
     ++top_counters_.nodes_visited;
   }
@@ -195,11 +195,7 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
   const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
   const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size_);
   auto lower_bound = [&](const TopNode& nd, const Vec3d& lo, double size) {
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double v = std::max({lo[k] - p[k], 0.0, p[k] - (lo[k] + size)});
-      d2 += v * v;
-    }
+    const double d2 = cell_d2(lo, size, p);
     const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
     float m = -std::numeric_limits<float>::infinity();
     const Plane* pl = top_planes_ + nd.plane_begin;
@@ -221,9 +217,8 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     const double r = bst.b.best + search_tol(p, root_lo_, root_size_);
     while (top_[start].kind == TopKind::inner) {
       const double csz = root_size_ / double(std::uint64_t(1) << (start_level + 1));
-      const int o = (p.x >= start_lo.x + csz ? 1 : 0) | (p.y >= start_lo.y + csz ? 2 : 0) | (p.z >= start_lo.z + csz ? 4 : 0);
-      const Vec3d clo{start_lo.x + ((o & 1) ? csz : 0.0), start_lo.y + ((o & 2) ? csz : 0.0),
-                      start_lo.z + ((o & 4) ? csz : 0.0)};
+      const int o = child_octant(p, start_lo, csz);
+      const Vec3d clo = child_corner(start_lo, csz, o);
       const std::uint32_t ci = top_children_[top_[start].index + std::uint32_t(o)];
       if (!cell_holds_ball(clo, csz, p, r) || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
       ++top_counters_.nodes_visited;
@@ -254,7 +249,7 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
       const std::uint32_t ci = top_children_[nd.index + std::uint32_t(o)];
       const TopNode& cn = top_[ci];
       if (cn.kind == TopKind::white || cn.kind == TopKind::black) continue;
-      const Vec3d lo{it.lo.x + ((o & 1) ? csz : 0.0), it.lo.y + ((o & 2) ? csz : 0.0), it.lo.z + ((o & 4) ? csz : 0.0)};
+      const Vec3d lo = child_corner(it.lo, csz, o);
       const double b = lower_bound(cn, lo, csz);
       if (b > bst.b.best) continue;
       kids[nk++] = {lo, b, ci, cl};
