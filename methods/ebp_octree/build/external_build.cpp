@@ -261,8 +261,10 @@ void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_
   // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
   // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
   // 3 batches alive (built, queued, assembling), each ≈ avail/12.
-  const float* vf = src.float_vertices();
-  const std::size_t batch_cap = std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + sizeof(LeafTri) + 64));
+  // A batch's records, their coordinates (gathered from the source in one call, before the
+  // parallel leaf builds: a paged source serves one caller at a time) and its leaves' triangles.
+  const std::size_t batch_cap =
+      std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + 12 + 36 + sizeof(LeafTri) + 64));
   struct Built {
     std::vector<std::uint64_t> m;
     std::vector<Node> nodes;
@@ -314,6 +316,8 @@ void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_
   };
   try {
     std::vector<Rec> batch;
+    std::vector<std::uint32_t> batch_vertices;
+    std::vector<float> batch_xyz;
     std::vector<std::size_t> starts;
     std::uint64_t consumed = 0;
     auto process = [&] {
@@ -326,18 +330,18 @@ void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_
       bt.blocks.resize(nl);
       bt.tmps.resize(nl);
       bt.halves.resize(nl);
+      batch_vertices.resize(3 * batch.size());
+      batch_xyz.resize(9 * batch.size());
+      for (std::size_t k = 0; k < batch.size(); ++k) std::memcpy(&batch_vertices[3 * k], batch[k].v, sizeof batch[k].v);
+      src.gather_vertices(batch_vertices.data(), batch_vertices.size(), batch_xyz.data());
       auto one = [&](std::size_t i) {
         const std::size_t b = starts[i], e = starts[i + 1];
         std::vector<std::uint32_t> tri(e - b);
-        std::vector<float> xyz(9 * (e - b));
-        for (std::size_t k = b; k < e; ++k) {
-          tri[k - b] = batch[k].t;
-          for (int c = 0; c < 3; ++c) std::memcpy(&xyz[9 * (k - b) + 3 * std::size_t(c)], vf + 3 * std::size_t(batch[k].v[c]), 12);
-        }
+        for (std::size_t k = b; k < e; ++k) tri[k - b] = batch[k].t;
         bt.blocks[i].resize(e - b);
         bt.m[i] = batch[b].m;
         const Octcode code = octcode_make(L, batch[b].m);
-        build_leaf(ctx, code, e - b, tri.data(), xyz.data(), &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
+        build_leaf(ctx, code, e - b, tri.data(), &batch_xyz[9 * b], &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
                    &bt.tmps[i], &bt.halves[i]);
       };
       if (threads <= 1 || nl < 2) {

@@ -14,6 +14,7 @@
 
 #include "harness/io/mesh_reader.hpp"
 #include "methods/ebp_octree/build/build_parts.hpp"
+#include "methods/ebp_octree/build/vertex_pages.hpp"
 
 namespace ebp {
 
@@ -33,7 +34,9 @@ class MemorySource final : public TriangleSource {
     for (const Vec3d& p : v_)
       for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k] - origin_[k]));
   }
-  const float* float_vertices() const override { return vf_.data(); }
+  void gather_vertices(const std::uint32_t* idx, std::size_t n, float* xyz) override {
+    for (std::size_t k = 0; k < n; ++k) std::memcpy(xyz + 3 * k, &vf_[3 * std::size_t(idx[k])], 3 * sizeof(float));
+  }
   Vec3d origin() const override { return origin_; }
   std::uint64_t num_triangles() const override { return t_.size(); }
   std::uint64_t num_vertices() const override { return v_.size(); }
@@ -64,39 +67,51 @@ class MemorySource final : public TriangleSource {
 };
 
 /// A mesh file in any format the harness reads, through its mesh reader (mesh_reader.hpp): the
-/// vertices read once into float (held), the triangles re-read from the file at every scan.
+/// vertices read once into float (held, or paged when they exceed paging.held_limit), the
+/// triangles re-read from the file at every scan.
 class FileSource final : public TriangleSource {
  public:
-  explicit FileSource(const std::string& path) : reader_(bvhbench::MeshReader::open(path)) {
-    vf_.reserve(3 * std::size_t(reader_->num_vertices()));  // the header's count, checked against the file size
+  FileSource(const std::string& path, const VertexPaging& paging) : reader_(bvhbench::MeshReader::open(path)) {
+    const std::uint64_t nv = reader_->num_vertices();  // the header's count, checked against the file size
+    if (nv * 3 * sizeof(float) > paging.held_limit && !paging.tmp_dir.empty())
+      pages_ = std::make_unique<VertexPages>(paging.tmp_dir, nv, paging.cache_bytes);
+    else
+      vf_.reserve(3 * std::size_t(nv));
     Box3d bounds;
-    reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
-      for (std::size_t i = 0; i < n; ++i) {
-        bounds.add(v[i]);
-        for (int k = 0; k < 3; ++k) vf_.push_back(float(v[i][k]));
-      }
+    read_vertices([&](const Vec3d& v) {
+      bounds.add(v);
+      return v;
     });
     origin_ = detail::choose_origin(bounds);
     if (origin_ != Vec3d(0, 0, 0)) {
       // A model far from the origin: its vertices again, from a second reader (a reader delivers
       // its vertices once), as float(v - origin). Holding doubles instead would cost 24 B a vertex.
       reader_ = bvhbench::MeshReader::open(path);
-      std::size_t j = 0;
-      reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
-        for (std::size_t i = 0; i < n && j + 3 <= vf_.size(); ++i)
-          for (int k = 0; k < 3; ++k) vf_[j++] = float(v[i][k] - origin_[k]);
-      });
+      if (pages_) pages_->rewind();
+      vf_.clear();
+      read_vertices([&](const Vec3d& v) { return v - origin_; });
     }
+    if (pages_) pages_->finish();
     vf_.shrink_to_fit();
   }
   Vec3d origin() const override { return origin_; }
   std::uint64_t num_triangles() const override { return reader_->num_triangles(); }
   std::uint64_t num_vertices() const override { return reader_->num_vertices(); }
   std::string sha256() const override { return reader_->sha256(); }
-  const float* float_vertices() const override { return vf_.data(); }
-  /// The float vertices, the reader's buffers (an STL's weld table among them) and one chunk.
+  void gather_vertices(const std::uint32_t* idx, std::size_t n, float* xyz) override {
+    if (pages_) {
+      pages_->gather(idx, n, xyz);
+      return;
+    }
+    for (std::size_t k = 0; k < n; ++k) std::memcpy(xyz + 3 * k, &vf_[3 * std::size_t(idx[k])], 3 * sizeof(float));
+  }
+  std::pair<std::uint64_t, std::uint64_t> vertex_page_reads() const override {
+    return pages_ ? std::pair{pages_->reads(), pages_->misses()} : std::pair<std::uint64_t, std::uint64_t>{0, 0};
+  }
+  /// The float vertices or their page cache, the reader's buffers (an STL's weld table among
+  /// them) and one chunk.
   std::size_t resident_bytes() const override {
-    return vf_.capacity() * sizeof(float) + reader_->resident_bytes() +
+    return vf_.capacity() * sizeof(float) + (pages_ ? pages_->resident_bytes() : 0) + reader_->resident_bytes() +
            kScanChunk * (3 * sizeof(std::uint32_t) + 9 * sizeof(float));
   }
   bool streaming() const override { return true; }
@@ -108,19 +123,35 @@ class FileSource final : public TriangleSource {
       idx.resize(3 * n);
       xyz.resize(9 * n);
       for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-          const std::uint32_t v = t[i][k];
-          idx[3 * i + std::size_t(k)] = v;
-          std::memcpy(&xyz[9 * i + 3 * std::size_t(k)], &vf_[3 * std::size_t(v)], 3 * sizeof(float));
-        }
+        for (int k = 0; k < 3; ++k) idx[3 * i + std::size_t(k)] = t[i][k];
+      gather_vertices(idx.data(), 3 * n, xyz.data());
       f(first, n, idx.data(), xyz.data());
     });
   }
 
  private:
+  /// Every vertex through `to_frame` (which also sees it first: the bounds), as float, into the
+  /// held array or the vertex file.
+  template <class ToFrame>
+  void read_vertices(ToFrame&& to_frame) {
+    std::vector<float> buf;
+    reader_->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+      buf.resize(3 * n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3d w = to_frame(v[i]);
+        for (int k = 0; k < 3; ++k) buf[3 * i + std::size_t(k)] = float(w[k]);
+      }
+      if (pages_)
+        pages_->append(buf.data(), n);
+      else
+        vf_.insert(vf_.end(), buf.begin(), buf.end());
+    });
+  }
+
   std::unique_ptr<bvhbench::MeshReader> reader_;
   Vec3d origin_;
-  std::vector<float> vf_;
+  std::vector<float> vf_;               ///< the vertices, when held
+  std::unique_ptr<VertexPages> pages_;  ///< the vertices, when paged
 };
 
 }  // namespace
@@ -130,7 +161,9 @@ std::unique_ptr<TriangleSource> make_memory_source(const std::vector<Vec3d>& ver
   return std::make_unique<MemorySource>(vertices, triangles);
 }
 
-std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path) { return std::make_unique<FileSource>(path); }
+std::unique_ptr<TriangleSource> open_mesh_source(const std::string& path, const VertexPaging& paging) {
+  return std::make_unique<FileSource>(path, paging);
+}
 
 void prefetch_scan(TriangleSource& src, const TriangleSource::Chunk& fn) {
   struct Buf {

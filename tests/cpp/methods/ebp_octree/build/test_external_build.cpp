@@ -225,6 +225,53 @@ TEST(EbpExtBuild, StreamedPlySameAsLoaded) {
   EXPECT_TRUE(fs::is_empty(d.runs()));
 }
 
+// Vertices paged from a temporary file (vertex_pages.hpp) instead of held: the same store, byte
+// for byte, through a two-page cache that misses all the time; also for a model far from the
+// origin, whose vertices are written a second time in the build's frame. The vertex file leaves
+// nothing in the temporary directory, and a bad index is still an InputError.
+TEST(EbpExtBuild, PagedVerticesGiveTheSameStore) {
+  bvhbench::Mesh far = torus(120, 60);
+  for (Vec3d& v : far.vertices) v = v + Vec3d(3.0e6, -1.0e6, 2.0e6);
+  const std::vector<std::pair<std::string, bvhbench::Mesh>> meshes = {{"torus", torus(120, 60)}, {"far torus", far}};
+  for (const auto& [name, m] : meshes) {
+    SCOPED_TRACE(name);
+    TmpDir d;
+    bvhbench::write_ply(d.file("m.ply"), m);
+    auto held = open_mesh_source(d.file("m.ply"));
+    VertexPaging paging;
+    paging.held_limit = 0;
+    paging.tmp_dir = d.runs();
+    paging.cache_bytes = 1;  // two pages of 1,024 vertices, for 7,200 vertices
+    auto paged = open_mesh_source(d.file("m.ply"), paging);
+    EXPECT_EQ(paged->origin() != Vec3d(0, 0, 0), name == "far torus");
+    EXPECT_TRUE(fs::is_empty(d.runs()));
+    const std::string a = d.file("held.ebp"), b = d.file("paged.ebp");
+    build_store_external(*held, a, tiny_options(d));
+    const ExtBuildReport rep = build_store_external(*paged, b, tiny_options(d));
+    EXPECT_EQ(held->vertex_page_reads(), (std::pair<std::uint64_t, std::uint64_t>{0, 0}));
+    const auto [reads, misses] = paged->vertex_page_reads();
+    EXPECT_GT(misses, 100u);
+    EXPECT_GE(reads, 3 * rep.records) << "every record's vertices were read through the pages";
+    EXPECT_LT(paged->resident_bytes(), held->resident_bytes());
+    const auto fa = read_range(a, 0, std::size_t(fs::file_size(a))), fb = read_range(b, 0, std::size_t(fs::file_size(b)));
+    EXPECT_TRUE(fa == fb) << "held and paged vertices give the same file";
+    EXPECT_TRUE(fs::is_empty(d.runs()));
+  }
+  {  // an index out of range, paged: an InputError, nothing written
+    TmpDir d;
+    bvhbench::Mesh m = torus(30, 12);
+    m.triangles[17][1] = std::uint32_t(m.vertices.size() + 5);
+    bvhbench::write_ply(d.file("bad.ply"), m);
+    VertexPaging paging;
+    paging.held_limit = 0;
+    paging.tmp_dir = d.runs();
+    auto src = open_mesh_source(d.file("bad.ply"), paging);
+    EXPECT_THROW(build_store_external(*src, d.file("bad.ebp"), tiny_options(d)), bvhbench::InputError);
+    EXPECT_FALSE(fs::exists(d.file("bad.ebp")));
+    EXPECT_TRUE(fs::is_empty(d.runs()));
+  }
+}
+
 TEST(EbpExtBuild, FailuresLeaveNothing) {
   TmpDir d;
   const bvhbench::Mesh m = torus(80, 40);
@@ -423,4 +470,31 @@ TEST(EbpExtBuild, CliFileSizeLimitLeavesNothing) {
   const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(err.find("nothing written"), std::string::npos) << err;
   EXPECT_NE(err.find("File too large"), std::string::npos) << err;
+}
+
+// `ebp build` pages the vertices when they would take more than half the budget, and says so:
+// the --json summary's "vertex_pages" (absent when they are held), the text's cache share.
+TEST(EbpExtBuild, CliPagesVerticesBeyondHalfTheBudget) {
+  TmpDir d;
+  bvhbench::write_ply(d.file("t.ply"), torus(300, 200));  // 60,000 vertices: 703 KiB as float
+  auto run = [&](const std::string& budget, const std::string& out, const std::string& flags) {
+    const std::string cmd = std::string(BVHBENCH_EXE) + " --quiet ebp build --mesh " + d.file("t.ply") + " --out " +
+                            d.file(out) + " --memory-budget " + budget + " " + flags + " > " + d.file("out.txt");
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream in(d.file("out.txt"));
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string paged = run("1", "a.ebp", "--json"), held = run("64", "b.ebp", "--json");
+  EXPECT_NE(paged.find("\"vertex_pages\""), std::string::npos) << paged;
+  EXPECT_NE(paged.find("\"misses\""), std::string::npos) << paged;
+  EXPECT_EQ(held.find("\"vertex_pages\""), std::string::npos) << held;
+  const std::string text = run("1", "c.ebp", "");
+  EXPECT_NE(text.find("vertices paged from a temporary file"), std::string::npos) << text;
+  for (const auto& e : fs::directory_iterator(d.p))
+    EXPECT_EQ(e.path().filename().string().rfind("ebp-build-", 0), std::string::npos) << "left behind: " << e.path();
+  // The same pages: the decoded trees are identical.
+  const Octree a = StoreReader(d.file("a.ebp")).load_all(), b = StoreReader(d.file("b.ebp")).load_all();
+  EXPECT_TRUE(same_bytes(a.tris, b.tris));
+  EXPECT_TRUE(same_bytes(a.nodes, b.nodes));
+  EXPECT_TRUE(same_bytes(a.leaves, b.leaves));
 }
