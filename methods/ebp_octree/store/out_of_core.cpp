@@ -124,6 +124,47 @@ struct TopItem {
   std::uint32_t node;
   int level;
 };
+
+/// Pushes a node's nk (<= 8) children onto a depth-first stack in descending bound, so that the
+/// nearest is popped first.
+void push_nearest_last(TopItem* kids, int nk, TopItem* stack, int& sp) {
+  for (int a = 1; a < nk; ++a) {
+    TopItem x = kids[a];
+    int b = a - 1;
+    while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
+    kids[b + 1] = x;
+  }
+  for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+}
+
+/// A lower bound on the distance from p to the geometry under a top node: its cell's box and
+/// its planes (the point in the root-centred float frame, `slack` for the float evaluation).
+struct TopBound {
+  Vec3d p;
+  float fx, fy, fz;
+  double slack;
+  TopBound(const Vec3d& p_, const Vec3d& root_centre, double root_size) : p(p_) {
+    const Vec3d pr = p - root_centre;
+    fx = float(pr.x);
+    fy = float(pr.y);
+    fz = float(pr.z);
+    slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size);
+  }
+  double operator()(const TopNode& nd, const Plane* planes, const Vec3d& lo, double size) const {
+    const double d2 = cell_d2(lo, size, p);
+    const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    float m = -std::numeric_limits<float>::infinity();
+    const Plane* pl = planes + nd.plane_begin;
+    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
+      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
+    return std::max(b, double(m) - slack);
+  }
+};
+
+/// Pages asked of the OS at once before a search's first read (OutOfCore::prefetch_pages):
+/// enough for a probe's ball at contact and on its approach, few enough that a far point's
+/// large ball does not flood the disk with pages its shrinking bound will skip.
+constexpr int kPrefetchPages = 32;
 }  // namespace
 
 /// The best triangle so far of one distance query, over all pages.
@@ -172,11 +213,50 @@ DistanceAnswer OutOfCore::unsigned_distance(const Vec3d& p) {
   return r;
 }
 
+void OutOfCore::prefetch_pages(const Vec3d& p, double best, std::uint64_t qid) {
+  const TopBound bound(p, root_centre_, root_size_);
+  TopItem stack[8 * (kMaxLevel + 2)];
+  int sp = 0, asked = 0;
+  stack[sp++] = {root_lo_, 0.0, 0u, 0};
+  while (sp > 0 && asked < kPrefetchPages) {
+    const TopItem it = stack[--sp];
+    const TopNode& nd = top_[it.node];
+    if (nd.kind == TopKind::page) {
+      if (page_stamp_[nd.index] != qid && !cache_.resident(nd.index)) {
+        store_->will_need(nd.index);
+        ++asked;
+      }
+      continue;
+    }
+    if (nd.kind != TopKind::inner) continue;
+    const double csz = root_size_ / double(std::uint64_t(1) << (it.level + 1));
+    TopItem kids[8];
+    int nk = 0;
+    for (int o = 0; o < 8; ++o) {
+      const std::uint32_t ci = top_children_[nd.index + std::uint32_t(o)];
+      const TopNode& cn = top_[ci];
+      if (cn.kind != TopKind::inner && cn.kind != TopKind::page) continue;
+      const Vec3d lo = child_corner(it.lo, csz, o);
+      const double b = bound(cn, top_planes_, lo, csz);
+      if (b > best) continue;
+      kids[nk++] = {lo, b, ci, it.level + 1};
+    }
+    push_nearest_last(kids, nk, stack, sp);
+  }
+}
+
 void OutOfCore::search(const Vec3d& p, Best& bst) {
   const std::uint64_t qid = ++query_id_;
+  bool prefetched = false;
   auto visit_page = [&](std::uint32_t id) {
     if (page_stamp_[id] == qid) return;
     page_stamp_[id] = qid;
+    // The first page this search must read from the file: the others it may read are asked for
+    // now, while this one is read (with no bound yet, after it: its answer gives the bound).
+    if (!prefetched && !cache_.resident(id) && bst.b.best < std::numeric_limits<double>::infinity()) {
+      prefetched = true;
+      prefetch_pages(p, bst.b.best, qid);
+    }
     page_distance(id, cache_.get(id), p, bst);
   };
   if (coherent_ && last_page_ != UINT32_MAX) {
@@ -191,18 +271,10 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     if (page != UINT32_MAX) visit_page(page);
   }
 
-  const Vec3d pr = p - root_centre_;
-  const float fx = float(pr.x), fy = float(pr.y), fz = float(pr.z);
-  const double slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size_);
+  const TopBound bound(p, root_centre_, root_size_);
   auto lower_bound = [&](const TopNode& nd, const Vec3d& lo, double size) {
-    const double d2 = cell_d2(lo, size, p);
-    const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
-    float m = -std::numeric_limits<float>::infinity();
-    const Plane* pl = top_planes_ + nd.plane_begin;
-    for (std::uint32_t k = 0; k < nd.plane_count; ++k)
-      m = std::max(m, pl[k].n[0] * fx + pl[k].n[1] * fy + pl[k].n[2] * fz - pl[k].d);
     top_counters_.planes_tested += nd.plane_count;
-    return std::max(b, double(m) - slack);
+    return bound(nd, top_planes_, lo, size);
   };
 
   // The narrowed start (as the in-memory search's): with a finite best (the previous page's
@@ -254,13 +326,7 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
       if (b > bst.b.best) continue;
       kids[nk++] = {lo, b, ci, cl};
     }
-    for (int a = 1; a < nk; ++a) {  // descending bound: nearest popped first
-      TopItem x = kids[a];
-      int b = a - 1;
-      while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
-      kids[b + 1] = x;
-    }
-    for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+    push_nearest_last(kids, nk, stack, sp);
   }
 }
 

@@ -74,6 +74,11 @@ class OutOfCore {
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
   /// The branch and bound over the top tree and the pages, from the running best in `b`.
   void search(const Vec3d& p, Best& b);
+  /// Before the first page a search must read: the pages it could still visit (top-tree bound
+  /// within `best`), up to kPrefetchPages nearest first, that are not resident, asked of the OS
+  /// at once (StoreReader::will_need), so that their reads overlap instead of following one
+  /// another. Counts no work: it changes when bytes arrive, not what is read or answered.
+  void prefetch_pages(const Vec3d& p, double best, std::uint64_t qid);
   /// The page whose cell holds p, down p's octants of the top tree; UINT32_MAX where p's top
   /// cell is empty or p is outside the root.
   std::uint32_t page_on_path(const Vec3d& p);

@@ -25,6 +25,8 @@ class PageCache {
   PageCache(const StoreReader& store, std::size_t budget_bytes, bool coherent);
   /// The page, loaded (and checked) on a miss. The reference stays valid until the next get().
   Entry& get(std::uint32_t id);
+  /// Whether page `id` is loaded (a get() would not read it).
+  bool resident(std::uint32_t id) const { return slot_[id] != nullptr; }
   /// Evicts everything (counters of the evicted queries are kept).
   void clear();
   std::size_t resident_bytes() const { return used_; }

@@ -75,6 +75,11 @@ void StoreReader::drop_os_cache() const {
   if (fd_ >= 0) (void)::posix_fadvise(fd_, 0, 0, POSIX_FADV_DONTNEED);
 }
 
+void StoreReader::will_need(std::uint32_t id) const {
+  if (fd_ >= 0 && id < dir_.size())
+    (void)::posix_fadvise(fd_, off_t(dir_[id].offset), off_t(dir_[id].size), POSIX_FADV_WILLNEED);
+}
+
 std::size_t StoreReader::pinned_bytes() const {
   return sizeof(*this) + top_nodes_.capacity() * sizeof(TopNode) + top_children_.capacity() * 4 +
          top_planes_.capacity() * sizeof(Plane) + dir_.capacity() * sizeof(PageEntry) + info_.capacity() +

@@ -41,6 +41,9 @@ class StoreReader {
   std::unique_ptr<Page> load_page(std::uint32_t id, std::uint64_t* bytes_read = nullptr) const;
   /// Evicts the file from the OS page cache (posix_fadvise DONTNEED); no-op for in-memory bytes.
   void drop_os_cache() const;
+  /// Asks the OS to read page `id` into its page cache in the background (posix_fadvise
+  /// WILLNEED), so that a load_page() soon after finds it there; no-op for in-memory bytes.
+  void will_need(std::uint32_t id) const;
 
   /// Reassembles the whole in-memory tree (for tests: round trip). Node order may differ from
   /// the original's only where the original was not pre-order; answers are the same.
