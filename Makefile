@@ -154,8 +154,9 @@ paper: build-runner
 	$(VPY) plots/report.py results/paper
 
 # Beyond the paper: 128M triangles, generated in chunks (2.4 GB of PLY), the store built out of
-# core within a 1 GiB budget (≈ 12 GB on disk, with ≈ 3.5 GB of sort runs while it builds), then
-# suites/huge.yml from a 256 MiB page cache. Hours rather than minutes on 2 cores.
+# core within a 1 GiB budget (its vertices paged; ≈ 12 GB on disk, with ≈ 3.6 GB of sort runs
+# while it builds), then suites/huge.yml from a 256 MiB page cache. About 5 minutes on 2 idle
+# cores (generation 2, store 2, queries 1).
 HUGE_MODELS := scan_like_128m
 
 huge: build-runner
