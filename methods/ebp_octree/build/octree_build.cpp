@@ -31,6 +31,7 @@
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/sub_references.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
@@ -367,6 +368,7 @@ Octree Octree::build(const std::vector<Vec3d>& vin, const std::vector<std::array
     T.closed = closed;
   }
   compute_leaf_blocks(T);  // derived boxes (leaf_blocks.hpp)
+  compute_sub_references(T);  // derived reference points (sub_references.hpp)
   S.build_seconds = since(t_start);
   // (Hook: the tree is complete here.)
   report(1.0);

@@ -49,7 +49,7 @@ inline unsigned low_bits(unsigned m) { return m >= 32 ? ~0u : (1u << m) - 1u; }
 
 // --- baseline ---------------------------------------------------------------------------------
 
-unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8], unsigned ref_sides) {
   const float px = p[0], py = p[1], pz = p[2];
   unsigned gt = 0, lt = 0, pos = 0, deg = 0;
   unsigned j = 0;
@@ -77,6 +77,7 @@ unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], f
     pos |= (blk[j].flags & kRefPositive ? 1u : 0u) << j;
     deg |= (blk[j].flags & kDegenerate ? 1u : 0u) << j;
   }
+  if (ref_sides != kRefSidesFromFlags) pos = ref_sides;
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
@@ -222,7 +223,8 @@ EBP_AVX2 inline __m256 face_plane_values(const __m256 n[4], const float p[3]) {
       n[3]);
 }
 
-EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8],
+                                   unsigned ref_sides) {
   __m256 n[4];
   columns<offsetof(LeafTri, n)>(blk, m, n);
   const __m256 v = face_plane_values(n, p);
@@ -230,7 +232,9 @@ EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[
   const unsigned gt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(eps), _CMP_GT_OQ)));
   const unsigned lt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(-eps), _CMP_LT_OQ)));
   const __m256i fl = gather_flags(blk, m);
-  const unsigned pos = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 31))));  // kRefPositive
+  const unsigned pos = ref_sides != kRefSidesFromFlags
+                           ? ref_sides
+                           : unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 31))));  // kRefPositive
   const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 30))));  // kDegenerate
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }

@@ -18,6 +18,10 @@ namespace ebp {
 
 enum class LeafKernels : std::uint8_t { baseline = 0, avx2 = 1 };
 
+/// plane_pass's `ref_sides` for the leaf's own reference point: its sides are the LeafTris'
+/// kRefPositive flags.
+inline constexpr unsigned kRefSidesFromFlags = ~0u;
+
 /// The kernels in use (the best the CPU supports, unless forced).
 LeafKernels leaf_kernels();
 /// Forces `k` (tests, measurements); avx2 on a CPU without it keeps the baseline. Returns the
@@ -31,9 +35,11 @@ struct LeafKernelTable {
   /// Plane pass of the reference path over blk[0, m), 1 <= m <= 8. p = the query point in the
   /// leaf's frame (float(p - centre) per axis). Writes s[j] = ((n0 p0 + n1 p1) + n2 p2) - d in
   /// float for j < m and returns the bit mask (bit j) of the triangles the exact stage must look
-  /// at: not kDegenerate, and not strictly on the reference's side (s > eps with kRefPositive
-  /// set, s < -eps with it clear).
-  unsigned (*plane_pass)(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]);
+  /// at: not kDegenerate, and not strictly on the reference's side (s > eps with the reference
+  /// on the outer side, s < -eps with it on the inner side). `ref_sides`: bit j set when the
+  /// reference is on triangle j's outer side (a sub-reference's mask, Octree::sub_sides), or
+  /// kRefSidesFromFlags for the leaf's reference point (kRefPositive).
+  unsigned (*plane_pass)(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8], unsigned ref_sides);
   /// Box pass of the coherent step over blk[0, m), 1 <= m <= 8: the bit mask of the
   /// non-degenerate triangles whose float bounding box (min/max of their float vertices: exact)
   /// meets the closed box [lo, hi].

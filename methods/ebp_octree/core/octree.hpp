@@ -104,6 +104,16 @@ struct BlockBox {
 static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
 inline constexpr std::uint32_t kBlockTris = 8;
 
+/// A derived reference point of a leaf's octant (sub_references.hpp): strictly inside the
+/// octant, off every face plane of the leaf, with its exact winding number.
+struct SubRef {
+  float p[3];
+  std::int16_t winding;
+  std::uint8_t valid;  ///< 0: none found (the leaf's own reference point serves the octant)
+  std::uint8_t pad;
+};
+static_assert(sizeof(SubRef) == 16, "SubRef is 16 bytes");
+
 class Octree {
  public:
   /// Builds over `vertices` (#V) and `triangles` (#F, indices into vertices). Triangles may be
@@ -136,8 +146,12 @@ class Octree {
   std::vector<BlockBox> blocks;           ///< box of each group of kBlockTris LeafTris of a leaf
   std::vector<std::uint32_t> leaf_block;  ///< per leaf: its first block (ceil(tri_count / 8) blocks)
   std::vector<BlockBox> node_box;         ///< per node: box of its triangles within its cell
+  // --- derived (sub_references.cpp), on closed meshes only: empty otherwise ---
+  std::vector<SubRef> sub_refs;           ///< per leaf, 8 in octant order
+  std::vector<std::uint8_t> sub_sides;    ///< per block, 8 masks in octant order: bit j = LeafTri j of the block has sub-reference o on its outer side
   std::size_t derived_bytes() const {
-    return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox);
+    return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox) +
+           sub_refs.capacity() * sizeof(SubRef) + sub_sides.capacity();
   }
 
   std::size_t bytes() const;

@@ -128,8 +128,9 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
   return true;
 }
 
-/// leaf_winding from the leaf's reference point (its side of triangle k is the kRefPositive
-/// bit), block by block: a block of kBlockTris triangles whose box misses the segment's box
+/// leaf_winding from a reference point q of the leaf, block by block: the leaf's own (its side
+/// of triangle k is the kRefPositive bit; `q_sides` null) or one of its sub-references (its
+/// sides are q_sides[8 b] for block b, sub_references.hpp): a block of kBlockTris triangles whose box misses the segment's box
 /// (rounded outwards to float: conservative) holds no triangle the segment can cross or touch,
 /// nor p, so it is skipped whole; in the others the plane pass (leaf_kernels.hpp) gives the
 /// float plane values, bit for bit those of the scalar expression, and the triangles that the
@@ -137,7 +138,8 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
 /// go on, one at a time, in leaf order, reusing the plane value. Same decisions as leaf_winding
 /// with that q_side on the triangles of the blocks that meet the segment.
 bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
-                      const BlockBox* boxes, QueryCounters& cnt, int* delta, bool* on_surface) {
+                      const BlockBox* boxes, const std::uint8_t* q_sides, QueryCounters& cnt, int* delta,
+                      bool* on_surface) {
   const float pl[3] = {float(p.x - double(lf.centre[0])), float(p.y - double(lf.centre[1])),
                        float(p.z - double(lf.centre[2]))};
   const float eps = lf.eps;
@@ -151,9 +153,8 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
   const LeafKernelTable& K = leaf_kernel_table();
   int w = 0;
   // 1: go on, 0: stop (on the surface or degenerate segment). s: the float plane value.
-  auto one = [&](std::uint32_t k, float s) {
+  auto one = [&](std::uint32_t k, float s, int sq) {
     const LeafTri& t = blk[k];
-    const int sq = (t.flags & kRefPositive) ? 1 : -1;
     int sp;
     if (s > eps) sp = 1;
     else if (s < -eps) sp = -1;
@@ -183,13 +184,15 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
     const unsigned mb = std::min(nb - b0, 8u);
     cnt.planes_tested += mb;  // the blocks' boxes
     for (unsigned hit = K.block_pass(boxes + b0, mb, f0, f1); hit; hit &= hit - 1) {
-      const std::uint32_t k = (b0 + unsigned(__builtin_ctz(hit))) * kBlockTris;
+      const std::uint32_t b = b0 + unsigned(__builtin_ctz(hit)), k = b * kBlockTris;
       const unsigned m = std::min(n - k, kBlockTris);
       cnt.planes_tested += m;
       float s[kBlockTris];
-      for (unsigned todo = K.plane_pass(blk + k, m, pl, eps, s); todo; todo &= todo - 1) {
+      const unsigned sides = q_sides ? q_sides[8 * b] : kRefSidesFromFlags;
+      for (unsigned todo = K.plane_pass(blk + k, m, pl, eps, s, sides); todo; todo &= todo - 1) {
         const unsigned j = unsigned(__builtin_ctz(todo));
-        if (!one(k + j, s[j])) return false;
+        const bool q_outer = q_sides ? (sides >> j & 1u) != 0 : (blk[k + j].flags & kRefPositive) != 0;
+        if (!one(k + j, s[j], q_outer ? 1 : -1)) return false;
       }
     }
   }
@@ -298,7 +301,27 @@ bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std:
     if (step_from_prev(p, node, &w)) return w >= 1;
   }
   if (lf.ref_valid) {
-    if (leaf_winding_ref(p, ref, blk, n, lf, t_.blocks.data() + t_.leaf_block[li], counters, &delta, &on_surface)) {
+    const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[li];
+    if (!t_.sub_refs.empty()) {
+      // From the sub-reference of p's octant of the cell, when it has one: a shorter segment.
+      const int o = (p.x >= double(lf.centre[0]) ? 1 : 0) | (p.y >= double(lf.centre[1]) ? 2 : 0) |
+                    (p.z >= double(lf.centre[2]) ? 4 : 0);
+      const SubRef& sr = t_.sub_refs[std::size_t(li) * 8 + std::size_t(o)];
+      if (sr.valid) {
+        const std::uint8_t* sides = &t_.sub_sides[std::size_t(t_.leaf_block[li]) * 8 + std::size_t(o)];
+        if (leaf_winding_ref(p, to_d(sr.p), blk, n, lf, boxes, sides, counters, &delta, &on_surface)) {
+          const int w = sr.winding + delta;
+          if (track) {
+            prev_ok_ = true;
+            prev_p_ = p;
+            prev_w_ = w;
+          }
+          return w >= 1;
+        }
+        if (on_surface) return true;  // on the boundary: the solid is closed
+      }
+    }
+    if (leaf_winding_ref(p, ref, blk, n, lf, boxes, nullptr, counters, &delta, &on_surface)) {
       const int w = lf.ref_winding + delta;
       if (track) {
         prev_ok_ = true;

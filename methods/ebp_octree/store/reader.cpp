@@ -16,6 +16,7 @@
 
 #include "harness/util/errors.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/sub_references.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"
 
@@ -323,6 +324,7 @@ Octree StoreReader::load_all() const {
   };
   copy_top(0);
   compute_leaf_blocks(T);  // derived boxes (not in the file)
+  compute_sub_references(T);  // derived reference points (sub_references.hpp)
   return T;
 }
 

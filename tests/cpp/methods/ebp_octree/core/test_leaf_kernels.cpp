@@ -31,7 +31,9 @@ struct KernelsGuard {
 };
 
 /// The kernels' promise, written out one triangle at a time.
-unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8]) {
+/// ref_sides: as plane_pass's (kRefSidesFromFlags: the kRefPositive flags).
+unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8],
+                                unsigned ref_sides = kRefSidesFromFlags) {
   unsigned mask = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
@@ -40,7 +42,7 @@ unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3]
     v = v + t.n[2] * p[2];
     v = v - t.d;
     s[j] = v;
-    const bool ref_pos = t.flags & kRefPositive;
+    const bool ref_pos = ref_sides == kRefSidesFromFlags ? (t.flags & kRefPositive) != 0 : (ref_sides >> j & 1u) != 0;
     const bool skip = (t.flags & kDegenerate) || (ref_pos && v > eps) || (!ref_pos && v < -eps);
     if (!skip) mask |= 1u << j;
   }
@@ -162,6 +164,9 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           }
           float want_s[8], s[8];
           const unsigned want = plane_mask_spelled_out(blk, n, p, lf.eps, want_s);
+          const unsigned sides = unsigned(rng() & 0xFF);  // a sub-reference's sides, any
+          float want_s2[8], s2[8];
+          const unsigned want_sides = plane_mask_spelled_out(blk, n, p, lf.eps, want_s2, sides);
           const unsigned want_box = box_mask_spelled_out(blk, n, lo, hi);
           nonzero += want != 0;
           const unsigned nb = std::min((lf.tri_count - k + kBlockTris - 1) / kBlockTris, 8u);
@@ -178,8 +183,10 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(leaf_kernels(), kind);
             const LeafKernelTable& K = leaf_kernel_table();
             ASSERT_EQ(K.kind, kind);
-            ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s), want) << name << " kernel " << int(kind);
+            ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s, kRefSidesFromFlags), want) << name << " kernel " << int(kind);
             ASSERT_EQ(0, std::memcmp(s, want_s, n * sizeof(float))) << name << " kernel " << int(kind);
+            ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s2, sides), want_sides) << name << " kernel " << int(kind);
+            ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
             ASSERT_EQ(K.box_pass(blk, n, lo, hi), want_box) << name << " kernel " << int(kind);
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
             const unsigned es = K.edge_signs(sp, sq, e.a, e.b, e.c);
