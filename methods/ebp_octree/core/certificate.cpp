@@ -124,6 +124,7 @@ bool DistanceCertificate::finish(CertifiedHit* winner) {
 }
 
 const DistanceCertificate::Directions& DistanceCertificate::directions(const Member& m) {
+  if (directions_.empty()) directions_.resize(kDirectionSlots);
   Directions& e = directions_[m.key % kDirectionSlots];
   if (e.key == m.key) return e;
   e.key = m.key;

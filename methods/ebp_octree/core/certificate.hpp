@@ -182,7 +182,9 @@ class DistanceCertificate {
   std::uint32_t win_index_ = 0;
   std::vector<double> heap_;  ///< max-heap of the kNearest + 1 smallest distances offered
   std::vector<Member> members_;
-  std::vector<Directions> directions_ = std::vector<Directions>(kDirectionSlots);
+  /// kDirectionSlots of them, allocated at the first renewal: a query that never renews one (an
+  /// out-of-core page's, searched by the pages' branch and bound) holds none.
+  std::vector<Directions> directions_;
   std::vector<float> pack_;  ///< blocks x kScanRows x kScanLanes
   std::vector<std::uint8_t> masks_;
   std::uint32_t offered_ = 0;

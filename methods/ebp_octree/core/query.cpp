@@ -25,6 +25,12 @@ Query::Query(const Octree& tree, bool coherent)
 }
 
 Query::~Query() = default;
+
+std::size_t Query::state_bytes() const {
+  return stamp_.capacity() * sizeof(std::uint32_t) + leaf_stamp_.capacity() * sizeof(std::uint32_t) +
+         order_.capacity() * sizeof(order_[0]) + block_d2_.capacity() * sizeof(double) + sizeof(CertifiedPath) +
+         (coherent_ ? 2 * sizeof(NearSet) : 0);
+}
 Query::Query(Query&&) noexcept = default;
 
 void Query::set_scan_kernel(ScanKernel k) { path_->cert.set_kernel(k); }

@@ -119,6 +119,10 @@ class Query {
   void set_adaptive_certificate(bool on);
   /// The certificate's pre-test kernel (tests force the scalar one; must be supported).
   void set_scan_kernel(ScanKernel k);
+  /// The heap this query's state holds: its stamps and scratch, its path, and room for the two
+  /// near sets a coherent query allocates on first use (counted whether allocated yet or not,
+  /// so that a budget that counts this is never exceeded later).
+  std::size_t state_bytes() const;
   QueryCounters counters;
 
  private:

@@ -71,9 +71,8 @@ PageCache::Entry& PageCache::get(std::uint32_t id) {
   auto e = std::make_unique<Entry>();
   e->page = store_.load_page(id, &bytes_read);
   e->query.emplace(e->page->tree, coherent_);
-  // The query's state: a stamp per local triangle and per leaf (distance), block-order scratch.
-  e->bytes = e->page->bytes() + (std::size_t(e->page->tree.num_triangles) + e->page->tree.leaves.size()) * sizeof(std::uint32_t) +
-             sizeof(Entry);
+  // The query's state: stamps, scratch, its path and room for its near sets (Query::state_bytes).
+  e->bytes = e->page->bytes() + e->query->state_bytes() + sizeof(Entry);
   while (tail_ != UINT32_MAX && used_ + e->bytes > budget_) evict(tail_);
   used_ += e->bytes;
   ++resident_;
