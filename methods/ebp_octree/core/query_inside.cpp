@@ -302,35 +302,32 @@ bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std:
   }
   if (lf.ref_valid) {
     const BlockBox* boxes = t_.blocks.data() + t_.leaf_block[li];
-    if (!t_.sub_refs.empty()) {
-      // From the sub-reference of p's octant of the cell, when it has one: a shorter segment.
-      const int o = (p.x >= double(lf.centre[0]) ? 1 : 0) | (p.y >= double(lf.centre[1]) ? 2 : 0) |
-                    (p.z >= double(lf.centre[2]) ? 4 : 0);
-      const SubRef& sr = t_.sub_refs[std::size_t(li) * 8 + std::size_t(o)];
-      if (sr.valid) {
-        const std::uint8_t* sides = &t_.sub_sides[std::size_t(t_.leaf_block[li]) * 8 + std::size_t(o)];
-        if (leaf_winding_ref(p, to_d(sr.p), blk, n, lf, boxes, sides, counters, &delta, &on_surface)) {
-          const int w = sr.winding + delta;
-          if (track) {
-            prev_ok_ = true;
-            prev_p_ = p;
-            prev_w_ = w;
-          }
-          return w >= 1;
-        }
-        if (on_surface) return true;  // on the boundary: the solid is closed
+    // w(p) from a point q of the cell whose winding number w_q is known (its sides: q_sides, or
+    // the kRefPositive flags): false when the segment is degenerate and p is not on a triangle.
+    bool in = false;
+    auto from = [&](const Vec3d& q, const std::uint8_t* q_sides, int w_q) {
+      if (!leaf_winding_ref(p, q, blk, n, lf, boxes, q_sides, counters, &delta, &on_surface)) {
+        in = on_surface;  // on the boundary: the solid is closed
+        return on_surface;
       }
-    }
-    if (leaf_winding_ref(p, ref, blk, n, lf, boxes, nullptr, counters, &delta, &on_surface)) {
-      const int w = lf.ref_winding + delta;
+      const int w = w_q + delta;
       if (track) {
         prev_ok_ = true;
         prev_p_ = p;
         prev_w_ = w;
       }
-      return w >= 1;
+      in = w >= 1;
+      return true;
+    };
+    if (!t_.sub_refs.empty()) {
+      // From the sub-reference of p's octant of the cell, when it has one: a shorter segment.
+      const int o = (p.x >= double(lf.centre[0]) ? 1 : 0) | (p.y >= double(lf.centre[1]) ? 2 : 0) |
+                    (p.z >= double(lf.centre[2]) ? 4 : 0);
+      const SubRef& sr = t_.sub_refs[std::size_t(li) * 8 + std::size_t(o)];
+      if (sr.valid && from(to_d(sr.p), &t_.sub_sides[std::size_t(t_.leaf_block[li]) * 8 + std::size_t(o)], sr.winding))
+        return in;
     }
-    if (on_surface) return true;  // on the boundary: the solid is closed
+    if (from(ref, nullptr, lf.ref_winding)) return in;
   }
   // Rare: ref -> p passes through an edge or a vertex. Route through another point r2 of the
   // cell: w(r2) = w(ref) - (w(ref) - w(r2)), then w(p) = w(r2) + (w(p) - w(r2)). Both segments
