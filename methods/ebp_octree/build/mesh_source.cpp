@@ -20,6 +20,11 @@ namespace ebp {
 
 namespace {
 
+/// xyz[3k..3k+2] = vertex idx[k] of held float vertices vf (x, y, z each).
+void gather_held(const std::vector<float>& vf, const std::uint32_t* idx, std::size_t n, float* xyz) {
+  for (std::size_t k = 0; k < n; ++k) std::memcpy(xyz + 3 * k, &vf[3 * std::size_t(idx[k])], 3 * sizeof(float));
+}
+
 class MemorySource final : public TriangleSource {
  public:
   MemorySource(const std::vector<Vec3d>& v, const std::vector<std::array<std::uint32_t, 3>>& t) : v_(v), t_(t) {
@@ -34,9 +39,7 @@ class MemorySource final : public TriangleSource {
     for (const Vec3d& p : v_)
       for (int k = 0; k < 3; ++k) vf_.push_back(float(p[k] - origin_[k]));
   }
-  void gather_vertices(const std::uint32_t* idx, std::size_t n, float* xyz) override {
-    for (std::size_t k = 0; k < n; ++k) std::memcpy(xyz + 3 * k, &vf_[3 * std::size_t(idx[k])], 3 * sizeof(float));
-  }
+  void gather_vertices(const std::uint32_t* idx, std::size_t n, float* xyz) override { gather_held(vf_, idx, n, xyz); }
   Vec3d origin() const override { return origin_; }
   std::uint64_t num_triangles() const override { return t_.size(); }
   std::uint64_t num_vertices() const override { return v_.size(); }
@@ -99,11 +102,10 @@ class FileSource final : public TriangleSource {
   std::uint64_t num_vertices() const override { return reader_->num_vertices(); }
   std::string sha256() const override { return reader_->sha256(); }
   void gather_vertices(const std::uint32_t* idx, std::size_t n, float* xyz) override {
-    if (pages_) {
+    if (pages_)
       pages_->gather(idx, n, xyz);
-      return;
-    }
-    for (std::size_t k = 0; k < n; ++k) std::memcpy(xyz + 3 * k, &vf_[3 * std::size_t(idx[k])], 3 * sizeof(float));
+    else
+      gather_held(vf_, idx, n, xyz);
   }
   std::pair<std::uint64_t, std::uint64_t> vertex_page_reads() const override {
     return pages_ ? std::pair{pages_->reads(), pages_->misses()} : std::pair<std::uint64_t, std::uint64_t>{0, 0};

@@ -23,6 +23,7 @@
 #include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/near_set.hpp"
 #include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/core/search_stack.hpp"
 
 namespace ebp {
 
@@ -244,14 +245,7 @@ class Query::DistanceSearch {
         if (b > B.best) continue;
         kids[nk++] = {corner(lo), b, ci, cl};
       }
-      // insertion sort, descending bound
-      for (int a = 1; a < nk; ++a) {
-        StackItem x = kids[a];
-        int b = a - 1;
-        while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
-        kids[b + 1] = x;
-      }
-      for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
+      push_nearest_first(kids, nk, stack, sp);
     }
   }
 

@@ -10,6 +10,7 @@
 
 #include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/search_stack.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -125,18 +126,6 @@ struct TopItem {
   int level;
 };
 
-/// Pushes a node's nk (<= 8) children onto a depth-first stack in descending bound, so that the
-/// nearest is popped first.
-void push_nearest_last(TopItem* kids, int nk, TopItem* stack, int& sp) {
-  for (int a = 1; a < nk; ++a) {
-    TopItem x = kids[a];
-    int b = a - 1;
-    while (b >= 0 && kids[b].bound < x.bound) { kids[b + 1] = kids[b]; --b; }
-    kids[b + 1] = x;
-  }
-  for (int a = 0; a < nk; ++a) stack[sp++] = kids[a];
-}
-
 /// A lower bound on the distance from p to the geometry under a top node: its cell's box and
 /// its planes (the point in the root-centred float frame, `slack` for the float evaluation).
 struct TopBound {
@@ -241,7 +230,7 @@ void OutOfCore::prefetch_pages(const Vec3d& p, double best, std::uint64_t qid) {
       if (b > best) continue;
       kids[nk++] = {lo, b, ci, it.level + 1};
     }
-    push_nearest_last(kids, nk, stack, sp);
+    push_nearest_first(kids, nk, stack, sp);
   }
 }
 
@@ -326,7 +315,7 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
       if (b > bst.b.best) continue;
       kids[nk++] = {lo, b, ci, cl};
     }
-    push_nearest_last(kids, nk, stack, sp);
+    push_nearest_first(kids, nk, stack, sp);
   }
 }
 
