@@ -457,7 +457,9 @@ class Query::DistanceSearch {
 
   /// The triangle tests before the exact closest point: true if every point of `t` is strictly
   /// farther than the best. (px, py, pz): p in the leaf's frame, eps_p the bound of the error of
-  /// a face-plane value there.
+  /// a face-plane value there. Face plane and box only: a sharper bound (the face plane with the
+  /// vertices' bounding sphere, as node_bound has for nodes) pruned a few more triangles but cost
+  /// more than their exact closest points (HISTORY.md, "The triangle's sphere bound").
   bool triangle_pruned(const LeafTri& t, float px, float py, float pz, double eps_p) const {
     // Face plane first (one dot product), then the box one axis at a time (early exit).
     const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
@@ -469,31 +471,6 @@ class Query::DistanceSearch {
       const double v = std::max({lo - p[a], 0.0, p[a] - hi});
       bd2 += v * v;
       if (bd2 * (1.0 - 1e-12) > B.best2) return true;
-    }
-    // Face plane and the vertices' bounding sphere together (as for nodes, see node_bound):
-    // |p - y|^2 >= h^2 + (|tangential part of p - c| - rho)^2 for every y of the triangle. Far
-    // from a flat or gently curved patch, the face planes of all its triangles are at about the
-    // distance; this bound grows away from the foot of p.
-    if (h > 0) {
-      const double cx = (double(t.a[0]) + double(t.b[0]) + double(t.c[0])) * (1.0 / 3.0),
-                   cy = (double(t.a[1]) + double(t.b[1]) + double(t.c[1])) * (1.0 / 3.0),
-                   cz = (double(t.a[2]) + double(t.b[2]) + double(t.c[2])) * (1.0 / 3.0);
-      auto r2 = [&](const float* v) {
-        const double x = double(v[0]) - cx, y = double(v[1]) - cy, z = double(v[2]) - cz;
-        return x * x + y * y + z * z;
-      };
-      const double rho = std::sqrt(std::max({r2(t.a), r2(t.b), r2(t.c)})) * (1.0 + 1e-12);
-      const double nx = double(t.n[0]), ny = double(t.n[1]), nz = double(t.n[2]);
-      const double qx = p.x - cx, qy = p.y - cy, qz = p.z - cz;
-      const double q2 = qx * qx + qy * qy + qz * qz, qn = qx * nx + qy * ny + qz * nz;
-      // |n|^2 >= 1 - 1e-6 (a unit vector rounded to float, or zero: then h < 0), so
-      // q2 - qn^2 (1 + 1e-6) <= the tangential part squared: no division needed.
-      const double tan2 = q2 - qn * qn * (1.0 + 1e-6);
-      if (tan2 > rho * rho) {
-        const double tl = std::sqrt(tan2) - rho;
-        const double lim = B.best + 1e-6 * (std::fabs(qx) + std::fabs(qy) + std::fabs(qz) + rho) + tol;
-        if (h * h + tl * tl > lim * lim) return true;
-      }
     }
     return false;
   }
