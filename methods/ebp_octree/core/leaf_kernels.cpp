@@ -109,18 +109,21 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
 }
 
 unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
-                                const float q_hi[3], float plane_lim, float box_lim) {
+                                const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8],
+                                float box_d2[8]) {
   unsigned keep = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    const float s = t.n[0] * p[0] + t.n[1] * p[1] + t.n[2] * p[2] - t.d;
+    const float s = std::fabs(t.n[0] * p[0] + t.n[1] * p[1] + t.n[2] * p[2] - t.d);
     float sum = 0;
     for (int a = 0; a < 3; ++a) {
       const float lo = std::min(std::min(t.a[a], t.b[a]), t.c[a]), hi = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
       const float g = std::max(std::max(lo - q_hi[a], q_lo[a] - hi), 0.0f);
       sum = sum + g * g;
     }
-    if (!(std::fabs(s) > plane_lim) && !(sum > box_lim)) keep |= 1u << j;
+    plane_abs[j] = s;
+    box_d2[j] = sum;
+    if (!(s > plane_lim) && !(sum > box_lim)) keep |= 1u << j;
   }
   return keep;
 }
@@ -261,7 +264,8 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
 
 
 EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
-                                     const float q_hi[3], float plane_lim, float box_lim) {
+                                     const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8],
+                                     float box_d2[8]) {
   __m256 n[4], a[4], b[4], c[4];
   columns<offsetof(LeafTri, n)>(blk, m, n);  // nx, ny, nz, d
   columns<offsetof(LeafTri, a)>(blk, m, a);  // ax, ay, az (lane 3: bx, unused)
@@ -276,6 +280,8 @@ EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float
                                    _mm256_setzero_ps());
     sum = _mm256_add_ps(sum, _mm256_mul_ps(g, g));
   }
+  _mm256_storeu_ps(plane_abs, abs_s);
+  _mm256_storeu_ps(box_d2, sum);
   const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(abs_s, _mm256_set1_ps(plane_lim), _CMP_GT_OQ),
                                                                 _mm256_cmp_ps(sum, _mm256_set1_ps(box_lim), _CMP_GT_OQ))));
   return ~out & low_bits(m);

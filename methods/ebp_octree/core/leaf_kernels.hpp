@@ -56,13 +56,16 @@ struct LeafKernelTable {
   unsigned (*edge_signs)(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]);
   /// The distance query's pre-filter over blk[0, m), 1 <= m <= 8, before its per-triangle tests
   /// (query_distance.cpp): the bit mask of the triangles it keeps. It clears a triangle when its
-  /// face-plane value |((n0 p0 + n1 p1) + n2 p2) - d| (float, p in the leaf's frame: the same
-  /// expression as the per-triangle test) exceeds plane_lim, or when the squared distance from
-  /// the box [q_lo, q_hi] (the query point in the tree's frame rounded outwards to float) to the
-  /// triangle's float box, summed in float, exceeds box_lim. With the limits the caller sets
-  /// (distance_prefilter_limits) every triangle cleared is one the per-triangle tests prune too.
+  /// face-plane value |((n0 p0 + n1 p1) + n2 p2) - d| (float, p in the leaf's frame) exceeds
+  /// plane_lim, or when the squared distance from the box [q_lo, q_hi] (the query point in the
+  /// tree's frame rounded outwards to float) to the triangle's float box, ((0 + g0 g0) + g1 g1)
+  /// + g2 g2 in float, exceeds box_lim. With the limits the caller sets
+  /// (distance_prefilter_limits) every triangle cleared is strictly farther than the best they
+  /// were set for. Writes the two values of triangle j to plane_abs[j] and box_d2[j] (j < m;
+  /// lanes beyond may be written too), so that the per-triangle tests compare them again when
+  /// the best has moved, without evaluating them again.
   unsigned (*distance_pass)(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
-                            const float q_hi[3], float plane_lim, float box_lim);
+                            const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8], float box_d2[8]);
   LeafKernels kind;
 };
 
@@ -72,8 +75,8 @@ const LeafKernelTable& leaf_kernel_table();
 /// distance_pass's limits for a running best distance `best` (its square best2) and the leaf's
 /// face-plane error bound at p, eps_p: plane_lim >= (best + eps_p)(1 + 1e-9), box_lim >= best2
 /// (1 + 4e-6), both rounded up to float. The margins cover the float rounding of the box sum
-/// (< 3e-7 relative) and leave the per-triangle tests' double comparisons strictly decided, so
-/// the filter never clears a triangle that they would keep.
+/// (< 3e-7 relative), so a triangle whose value exceeds a limit is strictly farther than best:
+/// the distance search prunes it without an exact test.
 void distance_prefilter_limits(double best, double best2, double eps_p, float* plane_lim, float* box_lim);
 
 }  // namespace ebp

@@ -347,26 +347,35 @@ class Query::DistanceSearch {
     double eps_p;
   };
 
-  /// Block j of a leaf: its triangles go through the pre-filter first (8 at a time: face plane
-  /// and box in float, with margins), then the per-triangle tests, then the exact closest point.
-  /// The filter only clears triangles that those tests prune too (leaf_kernels.hpp), so what is
-  /// tested, and every counter, is the same.
+  /// Block j of a leaf: its triangles go through the pre-filter (8 at a time: face plane and box
+  /// in float, with margins), each survivor's two values are compared again with the limits of
+  /// the best as it is when its turn comes (the block's earlier triangles may have lowered it),
+  /// and the rest get the exact closest point. A sharper bound per triangle (the face plane with
+  /// the vertices' bounding sphere, as node_bound has for nodes) pruned a few more triangles but
+  /// cost more than their exact closest points (HISTORY.md, "The triangle's sphere bound").
   void scan_block(const LeafPoint& lp, std::uint32_t j) {
     const std::uint32_t k0 = lp.lf.tri_begin + j * kBlockTris;
     const std::uint32_t k1 = std::min(k0 + kBlockTris, lp.lf.tri_begin + lp.lf.tri_count);
     counters.planes_tested += k1 - k0;
-    if (B.best != limits_for_ || lp.eps_p != limits_eps_) {  // the best moved, or the leaf: the limits follow
-      distance_prefilter_limits(B.best, B.best2, lp.eps_p, &plane_lim_, &box_lim_);
-      limits_for_ = B.best;
-      limits_eps_ = lp.eps_p;
+    update_limits(lp.eps_p);
+    float plane_abs[8], box_d2[8];
+    for (unsigned bits = leaf_kernel_table().distance_pass(tris + k0, k1 - k0, lp.pl, q_lo, q_hi, plane_lim_,
+                                                           box_lim_, plane_abs, box_d2);
+         bits; bits &= bits - 1) {
+      const unsigned i = unsigned(__builtin_ctz(bits));
+      update_limits(lp.eps_p);
+      if (plane_abs[i] > plane_lim_ || box_d2[i] > box_lim_) continue;
+      test_triangle(k0 + i, lp.li);
     }
-    const LeafKernelTable& kt = leaf_kernel_table();
-    for (unsigned bits = kt.distance_pass(tris + k0, k1 - k0, lp.pl, q_lo, q_hi, plane_lim_, box_lim_); bits;
-         bits &= bits - 1) {
-      const std::uint32_t k = k0 + unsigned(__builtin_ctz(bits));
-      if (triangle_pruned(tris[k], lp.pl[0], lp.pl[1], lp.pl[2], lp.eps_p)) continue;
-      test_triangle(k, lp.li);
-    }
+  }
+
+  /// The pre-filter's limits (distance_prefilter_limits) for the best as it is now and the
+  /// leaf's face-plane error bound eps_p, computed again only when either has moved.
+  void update_limits(double eps_p) {
+    if (B.best == limits_for_ && eps_p == limits_eps_) return;
+    distance_prefilter_limits(B.best, B.best2, eps_p, &plane_lim_, &box_lim_);
+    limits_for_ = B.best;
+    limits_eps_ = eps_p;
   }
 
   /// Of the triangles k0 + i (i in `mask`), the one whose vertices' mean is nearest p, as its
@@ -453,26 +462,6 @@ class Query::DistanceSearch {
       }
     }
     return m;
-  }
-
-  /// The triangle tests before the exact closest point: true if every point of `t` is strictly
-  /// farther than the best. (px, py, pz): p in the leaf's frame, eps_p the bound of the error of
-  /// a face-plane value there. Face plane and box only: a sharper bound (the face plane with the
-  /// vertices' bounding sphere, as node_bound has for nodes) pruned a few more triangles but cost
-  /// more than their exact closest points (HISTORY.md, "The triangle's sphere bound").
-  bool triangle_pruned(const LeafTri& t, float px, float py, float pz, double eps_p) const {
-    // Face plane first (one dot product), then the box one axis at a time (early exit).
-    const float sv = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
-    const double h = double(std::fabs(sv)) - eps_p;
-    if (h > B.best) return true;
-    double bd2 = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double lo = double(std::min({t.a[a], t.b[a], t.c[a]})), hi = double(std::max({t.a[a], t.b[a], t.c[a]}));
-      const double v = std::max({lo - p[a], 0.0, p[a] - hi});
-      bd2 += v * v;
-      if (bd2 * (1.0 - 1e-12) > B.best2) return true;
-    }
-    return false;
   }
 
   /// A leaf's most separating plane at p, for the block bounds of its scan.

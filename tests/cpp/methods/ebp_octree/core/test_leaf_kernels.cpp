@@ -241,12 +241,27 @@ TEST(EbpLeafKernels, DistancePrefilterClearsOnlyTrianglesFartherThanTheBest) {
             float plane_lim, box_lim;
             distance_prefilter_limits(best, best * best, eps_p, &plane_lim, &box_lim);
             unsigned first = 0;
+            float first_plane[8], first_box[8];
             for (LeafKernels kind : kinds) {
               set_leaf_kernels(kind);
-              const unsigned mask = leaf_kernel_table().distance_pass(blk, n, p, q_lo, q_hi, plane_lim, box_lim);
-              if (kind == kinds.front()) first = mask;
+              float plane_abs[8], box_d2[8];
+              const unsigned mask =
+                  leaf_kernel_table().distance_pass(blk, n, p, q_lo, q_hi, plane_lim, box_lim, plane_abs, box_d2);
+              if (kind == kinds.front()) {
+                first = mask;
+                std::memcpy(first_plane, plane_abs, sizeof plane_abs);
+                std::memcpy(first_box, box_d2, sizeof box_d2);
+              }
               ASSERT_EQ(mask, first) << name << ": the kernels differ";
               ASSERT_EQ(mask & ~((1u << n) - 1u), 0u);
+              for (unsigned j = 0; j < n; ++j) {
+                ASSERT_EQ(std::memcmp(&plane_abs[j], &first_plane[j], 4), 0) << name << ": the plane values differ";
+                ASSERT_EQ(std::memcmp(&box_d2[j], &first_box[j], 4), 0) << name << ": the box distances differ";
+                // the values the mask was decided on, as the per-triangle tests read them
+                ASSERT_EQ(bool(mask >> j & 1u), !(plane_abs[j] > plane_lim) && !(box_d2[j] > box_lim)) << name;
+                const float s = blk[j].n[0] * p[0] + blk[j].n[1] * p[1] + blk[j].n[2] * p[2] - blk[j].d;
+                ASSERT_EQ(plane_abs[j], std::fabs(s)) << name;
+              }
             }
             for (unsigned j = 0; j < n; ++j) {
               if (first >> j & 1u) {
