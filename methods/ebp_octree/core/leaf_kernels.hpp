@@ -47,6 +47,9 @@ struct LeafKernelTable {
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);
+  /// Squared distances from p (double) to boxes[0, n), any n: d2[j] = ((0 + v0 v0) + v1 v1) +
+  /// v2 v2 in double, v_a = max(lo_a - p_a, 0, p_a - hi_a), the same bits from every kernel.
+  void (*box_distances)(const BlockBox* boxes, std::uint32_t n, const double p[3], double* d2);
   /// The exact signs of the three edge orientations of the segment p -> q against triangle
   /// (a, b, c) (float vertices, taken exactly as doubles; 16 bytes readable at each, as in a
   /// LeafTri): e0 = orient3d(p, q, a, b), e1 = orient3d(p, q, b, c), e2 = orient3d(p, q, c, a)

@@ -309,10 +309,10 @@ class Query::DistanceSearch {
       const BlockBox* bb = blocks + t_.leaf_block[li];
       double* d2s = block_d2_.data();
       double nearest = std::numeric_limits<double>::infinity();
-      for (std::uint32_t j = 0; j < nb; ++j) {
-        d2s[j] = box_d2(bb[j], p);
+      const double pd[3] = {p.x, p.y, p.z};
+      leaf_kernel_table().box_distances(bb, nb, pd, d2s);
+      for (std::uint32_t j = 0; j < nb; ++j)
         if (d2s[j] < nearest) { nearest = d2s[j]; first = j; }
-      }
       counters.planes_tested += nb;
       if (first != UINT32_MAX) {
         // In it, the triangle whose vertices' mean is nearest p first: the bound its exact test

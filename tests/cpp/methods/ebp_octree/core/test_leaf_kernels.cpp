@@ -176,6 +176,23 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           const Vec3d sp = to_d(v.a), sq = i < 4 ? to_d(v.c) : Vec3d(lf.centre[0] + U(rng) * half, lf.centre[1] + U(rng) * half,
                                                                       lf.centre[2] + U(rng) * half);
           const LeafTri& e = blk[(j0++) % n];
+          // squared distances from a double point (of the cell, or a corner of a block box: zero
+          // gaps) to all the leaf's block boxes (any count: a tail of fewer than four)
+          const std::uint32_t nall = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+          const BlockBox* all = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()];
+          const BlockBox& corner = all[rng() % nall];
+          const double pd[3] = {i < 6 ? lf.centre[0] + U(rng) * 2 * half : double(corner.lo[0]),
+                                i < 6 ? lf.centre[1] + U(rng) * 2 * half : double(corner.hi[1]),
+                                i < 6 ? lf.centre[2] + U(rng) * 2 * half : double(corner.lo[2]) + 0.25 * half};
+          std::vector<double> want_d2(nall), d2(nall);
+          for (std::uint32_t b = 0; b < nall; ++b) {
+            double sum = 0;
+            for (int a = 0; a < 3; ++a) {
+              const double gap = std::max(std::max(double(all[b].lo[a]) - pd[a], 0.0), pd[a] - double(all[b].hi[a]));
+              sum += gap * gap;
+            }
+            want_d2[b] = sum;
+          }
           const int want_e[3] = {orient3d(sp, sq, to_d(e.a), to_d(e.b)), orient3d(sp, sq, to_d(e.b), to_d(e.c)),
                                  orient3d(sp, sq, to_d(e.c), to_d(e.a))};
           for (LeafKernels kind : kinds) {
@@ -189,6 +206,8 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
             ASSERT_EQ(K.box_pass(blk, n, lo, hi), want_box) << name << " kernel " << int(kind);
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
+            K.box_distances(all, nall, pd, d2.data());
+            ASSERT_EQ(0, std::memcmp(d2.data(), want_d2.data(), nall * sizeof(double))) << name << " kernel " << int(kind);
             const unsigned es = K.edge_signs(sp, sq, e.a, e.b, e.c);
             for (int i = 0; i < 3; ++i)
               ASSERT_EQ(int(es >> i & 1u) - int(es >> (4 + i) & 1u), want_e[i]) << name << " kernel " << int(kind);
