@@ -127,10 +127,12 @@ nlohmann::json stats_json(const ebp::Octree& t) {
     part("block_boxes", t.blocks.capacity() * sizeof(ebp::BlockBox), t.blocks.size());
     part("leaf_block_index", t.leaf_block.capacity() * sizeof(std::uint32_t), t.leaf_block.size());
     part("node_boxes", t.node_box.capacity() * sizeof(ebp::BlockBox), t.node_box.size());
+    part("sub_references", t.sub_refs.capacity() * sizeof(ebp::SubRef), t.sub_refs.size());
+    part("sub_reference_sides", t.sub_sides.capacity(), t.sub_sides.size());
     j["bytes_breakdown"] = parts;
   }
   j["bytes"] = t.bytes() + t.derived_bytes();
-  j["derived_bytes"] = t.derived_bytes();  // leaf-block and node boxes, computed at build/load
+  j["derived_bytes"] = t.derived_bytes();  // boxes and sub-references, computed at build/load
   j["bytes_per_triangle"] = s.triangles ? double(t.bytes() + t.derived_bytes()) / double(s.triangles) : 0.0;
   j["tightness"] = {
       {"method", "exact: volume of the convex polytope cell box ∩ bounding planes, over the box volume"},

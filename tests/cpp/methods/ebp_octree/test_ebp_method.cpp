@@ -48,6 +48,12 @@ TEST(EbpMethod, RegistryAdapterMatchesBruteForce) {
   EXPECT_GT(n, 250);
   EXPECT_GT(ebp->structure_bytes(), 0u);
   EXPECT_TRUE(ebp->info().contains("tightness"));
+  // The bytes' breakdown accounts for all of them but the tree's own record.
+  const nlohmann::json info = ebp->info();
+  std::size_t parts = 0;
+  for (const auto& [name, part] : info["bytes_breakdown"].items()) parts += part["bytes"].get<std::size_t>();
+  EXPECT_EQ(parts + sizeof(ebp::Octree), info["bytes"].get<std::size_t>());
+  EXPECT_GT(info["bytes_breakdown"]["sub_references"]["bytes"].get<std::size_t>(), 0u);  // fandisk is closed
   bool has_nodes = false;
   for (auto& c : ebp->counters()) has_nodes |= c.name == "nodes_visited" && c.value > 0;
   EXPECT_TRUE(has_nodes);
