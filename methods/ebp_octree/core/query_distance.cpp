@@ -314,14 +314,7 @@ class Query::DistanceSearch {
       for (std::uint32_t j = 0; j < nb; ++j)
         if (d2s[j] < nearest) { nearest = d2s[j]; first = j; }
       counters.planes_tested += nb;
-      if (first != UINT32_MAX) {
-        // In it, the triangle whose vertices' mean is nearest p first: the bound its exact test
-        // gives lets the block's pre-filter clear most of the others.
-        const std::uint32_t k0 = lf.tri_begin + first * kBlockTris;
-        const std::uint32_t k1 = std::min(k0 + kBlockTris, lf.tri_begin + lf.tri_count);
-        test_triangle(k0 + nearest_mean(k0, (1u << (k1 - k0)) - 1), li);
-        scan_block(lp, first);
-      }
+      if (first != UINT32_MAX) scan_block(lp, first);
       pre_d2 = d2s;  // the other blocks are ordered from these distances: no second pass
     }
     const std::uint32_t m = order_blocks(li, lf, hn, pre_d2, first);
@@ -359,9 +352,19 @@ class Query::DistanceSearch {
     counters.planes_tested += k1 - k0;
     update_limits(lp.eps_p);
     float plane_abs[8], box_d2[8];
-    for (unsigned bits = leaf_kernel_table().distance_pass(tris + k0, k1 - k0, lp.pl, q_lo, q_hi, plane_lim_,
-                                                           box_lim_, plane_abs, box_d2);
-         bits; bits &= bits - 1) {
+    unsigned bits = leaf_kernel_table().distance_pass(tris + k0, k1 - k0, lp.pl, q_lo, q_hi, plane_lim_, box_lim_,
+                                                      plane_abs, box_d2);
+    if (!(B.best < std::numeric_limits<double>::infinity())) {
+      // No bound yet (the first block of a search without one; the pass kept every triangle):
+      // the triangle nearest p by its box, then by its face plane, first, so that its exact
+      // distance lets the others be pruned by the values the pass computed.
+      unsigned i0 = 0;
+      for (unsigned i = 1; i < k1 - k0; ++i)
+        if (box_d2[i] < box_d2[i0] || (box_d2[i] == box_d2[i0] && plane_abs[i] < plane_abs[i0])) i0 = i;
+      test_triangle(k0 + i0, lp.li);
+      bits &= ~(1u << i0);
+    }
+    for (; bits; bits &= bits - 1) {
       const unsigned i = unsigned(__builtin_ctz(bits));
       update_limits(lp.eps_p);
       if (plane_abs[i] > plane_lim_ || box_d2[i] > box_lim_) continue;
@@ -376,23 +379,6 @@ class Query::DistanceSearch {
     distance_prefilter_limits(B.best, B.best2, eps_p, &plane_lim_, &box_lim_);
     limits_for_ = B.best;
     limits_eps_ = eps_p;
-  }
-
-  /// Of the triangles k0 + i (i in `mask`), the one whose vertices' mean is nearest p, as its
-  /// offset i (float: a choice of order, not a bound).
-  unsigned nearest_mean(std::uint32_t k0, unsigned mask) const {
-    const float c3[3] = {float(3.0 * p.x), float(3.0 * p.y), float(3.0 * p.z)};
-    unsigned best_i = unsigned(__builtin_ctz(mask));
-    float dn = std::numeric_limits<float>::infinity();
-    for (; mask; mask &= mask - 1) {
-      const unsigned i = unsigned(__builtin_ctz(mask));
-      const LeafTri& t = tris[k0 + i];
-      const float x = t.a[0] + t.b[0] + t.c[0] - c3[0], y = t.a[1] + t.b[1] + t.c[1] - c3[1],
-                  z = t.a[2] + t.b[2] + t.c[2] - c3[2];
-      const float d = x * x + y * y + z * z;
-      if (d < dn) { dn = d; best_i = i; }
-    }
-    return best_i;
   }
 
   /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
