@@ -1,9 +1,10 @@
 #pragma once
-/// The inside query's per-block leaf kernels (DESIGN.md, "Inside: block-skipping leaf kernels"):
-/// the tests of a leaf's block boxes against a segment's box, and over one block of up to
-/// kBlockTris consecutive LeafTris the float face-plane pass of the reference path and the
-/// triangle-box pass of the coherent step; the three edge orientations of a segment crossing
-/// test. Two implementations, chosen
+/// The per-block leaf kernels (DESIGN.md, "Inside: block-skipping leaf kernels", and the distance
+/// search's bounds): the tests of a leaf's block boxes against a segment's or a ball's box, and
+/// over one block of up to kBlockTris consecutive LeafTris the float face-plane pass of the
+/// inside query's reference path and the triangle-box pass of its coherent step; the three edge
+/// orientations of a segment crossing test; the distance search's squared distances to block
+/// boxes and its per-block pre-filter. Two implementations, chosen
 /// once at run time: AVX2 (8 lanes) when the CPU has it, else the baseline (SSE2 on x86-64,
 /// plain C++ elsewhere). Every implementation evaluates the same float expressions in the same
 /// order without FMA (this file is compiled with -ffp-contract=off), so their results are bit
