@@ -128,19 +128,8 @@ unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3]
   return keep;
 }
 
-/// box_distances' value for one box: ((0 + v0 v0) + v1 v1) + v2 v2 in double, v_a = max(lo_a - p_a,
-/// 0, p_a - hi_a) (the distance search's box_d2).
-inline double box_distance2(const BlockBox& b, const double p[3]) {
-  double d2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double v = std::max({double(b.lo[a]) - p[a], 0.0, p[a] - double(b.hi[a])});
-    d2 += v * v;
-  }
-  return d2;
-}
-
-void box_distances_baseline(const BlockBox* boxes, std::uint32_t n, const double p[3], double* d2) {
-  for (std::uint32_t j = 0; j < n; ++j) d2[j] = box_distance2(boxes[j], p);
+void box_distances_baseline(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2) {
+  for (std::uint32_t j = 0; j < n; ++j) d2[j] = box_d2(boxes[j], p);
 }
 
 unsigned block_pass_baseline(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
@@ -331,12 +320,12 @@ EBP_AVX2 inline __m256d axis_gap2(__m128 lo, __m128 hi, __m256d P) {
   return _mm256_mul_pd(v, v);
 }
 
-EBP_AVX2 void box_distances_avx2(const BlockBox* boxes, std::uint32_t n, const double p[3], double* d2) {
+EBP_AVX2 void box_distances_avx2(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2) {
   // Four boxes at a time: their [lo.x, lo.y, lo.z, hi.x] and [lo.z, hi.x, hi.y, hi.z] rows
   // (two loads inside each record, as in block_pass) transposed into one column per
   // coordinate, widened to double: the baseline's operations on exactly the same values (a max
   // of the three terms in another order gives the same value; 0 + x = x), so the same bits.
-  const __m256d P0 = _mm256_set1_pd(p[0]), P1 = _mm256_set1_pd(p[1]), P2 = _mm256_set1_pd(p[2]);
+  const __m256d P0 = _mm256_set1_pd(p.x), P1 = _mm256_set1_pd(p.y), P2 = _mm256_set1_pd(p.z);
   std::uint32_t j = 0;
   for (; j + 4 <= n; j += 4) {
     __m128 l0 = _mm_loadu_ps(boxes[j].lo), l1 = _mm_loadu_ps(boxes[j + 1].lo), l2 = _mm_loadu_ps(boxes[j + 2].lo),
@@ -348,7 +337,7 @@ EBP_AVX2 void box_distances_avx2(const BlockBox* boxes, std::uint32_t n, const d
     _mm256_storeu_pd(d2 + j, _mm256_add_pd(_mm256_add_pd(axis_gap2(l0, h1, P0), axis_gap2(l1, h2, P1)),
                                            axis_gap2(l2, h3, P2)));
   }
-  for (; j < n; ++j) d2[j] = box_distance2(boxes[j], p);
+  for (; j < n; ++j) d2[j] = box_d2(boxes[j], p);
 }
 
 EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]) {

@@ -9,6 +9,7 @@
 /// plain C++ elsewhere). Every implementation evaluates the same float expressions in the same
 /// order without FMA (this file is compiled with -ffp-contract=off), so their results are bit
 /// for bit the same and the choice never changes an answer or a counter.
+#include <algorithm>
 #include <cstdint>
 
 #include "harness/core/geometry.hpp"
@@ -18,6 +19,18 @@
 namespace ebp {
 
 enum class LeafKernels : std::uint8_t { baseline = 0, avx2 = 1 };
+
+/// Squared distance from p to a float box, ((0 + v0 v0) + v1 v1) + v2 v2 in double with v_a =
+/// max(lo_a - p_a, 0, p_a - hi_a) (exact box; the rounding of this computation is covered by
+/// the distance query's `tol`). The box_distances kernels give its bits.
+inline double box_d2(const BlockBox& b, const Vec3d& p) {
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double v = std::max({double(b.lo[a]) - p[a], 0.0, p[a] - double(b.hi[a])});
+    d2 += v * v;
+  }
+  return d2;
+}
 
 /// plane_pass's `ref_sides` for the leaf's own reference point: its sides are the LeafTris'
 /// kRefPositive flags.
@@ -48,9 +61,9 @@ struct LeafKernelTable {
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);
-  /// Squared distances from p (double) to boxes[0, n), any n: d2[j] = ((0 + v0 v0) + v1 v1) +
-  /// v2 v2 in double, v_a = max(lo_a - p_a, 0, p_a - hi_a), the same bits from every kernel.
-  void (*box_distances)(const BlockBox* boxes, std::uint32_t n, const double p[3], double* d2);
+  /// Squared distances from p to boxes[0, n), any n: d2[j] = box_d2(boxes[j], p), the same bits
+  /// from every kernel.
+  void (*box_distances)(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2);
   /// The exact signs of the three edge orientations of the segment p -> q against triangle
   /// (a, b, c) (float vertices, taken exactly as doubles; 16 bytes readable at each, as in a
   /// LeafTri): e0 = orient3d(p, q, a, b), e1 = orient3d(p, q, b, c), e2 = orient3d(p, q, c, a)

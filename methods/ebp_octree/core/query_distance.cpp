@@ -42,17 +42,6 @@ struct StackItem {
 };
 inline StackItem::Corner corner(const Vec3d& v) { return {v.x, v.y, v.z}; }
 
-/// Squared distance from p to a float box (exact box; the rounding of this computation is
-/// covered by the query's `tol`).
-inline double box_d2(const BlockBox& b, const Vec3d& p) {
-  double d2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double v = std::max({double(b.lo[a]) - p[a], 0.0, p[a] - double(b.hi[a])});
-    d2 += v * v;
-  }
-  return d2;
-}
-
 /// A leaf's most separating bounding plane at p: h its lower bound of the distance, n its
 /// normal; h <= 0 for none.
 struct PlaneHint {
@@ -309,8 +298,7 @@ class Query::DistanceSearch {
       const BlockBox* bb = blocks + t_.leaf_block[li];
       double* d2s = block_d2_.data();
       double nearest = std::numeric_limits<double>::infinity();
-      const double pd[3] = {p.x, p.y, p.z};
-      leaf_kernel_table().box_distances(bb, nb, pd, d2s);
+      leaf_kernel_table().box_distances(bb, nb, p, d2s);
       for (std::uint32_t j = 0; j < nb; ++j)
         if (d2s[j] < nearest) { nearest = d2s[j]; first = j; }
       counters.planes_tested += nb;

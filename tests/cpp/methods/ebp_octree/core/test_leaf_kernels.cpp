@@ -206,7 +206,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
             ASSERT_EQ(K.box_pass(blk, n, lo, hi), want_box) << name << " kernel " << int(kind);
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
-            K.box_distances(all, nall, pd, d2.data());
+            K.box_distances(all, nall, Vec3d(pd[0], pd[1], pd[2]), d2.data());
             ASSERT_EQ(0, std::memcmp(d2.data(), want_d2.data(), nall * sizeof(double))) << name << " kernel " << int(kind);
             const unsigned es = K.edge_signs(sp, sq, e.a, e.b, e.c);
             for (int i = 0; i < 3; ++i)
