@@ -189,11 +189,17 @@ class Query::DistanceSearch {
       cand[i] = {d2, j};
       return true;
     });
+    // The set lists each input triangle once, and a served search tests nothing before it but
+    // the seed: the members need no once-per-query stamp (a load and a store in an array over
+    // all triangles, a cache miss on large meshes), only the seed's exclusion.
+    const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri : UINT32_MAX;
     for (std::uint32_t i = 0; i < m; ++i) {
       if (cand[i].first > lim2) break;  // lim2 follows the best down
       const std::uint32_t j = cand[i].second;
+      const LeafTri& t = tris[ns.k[j]];
+      if (t.tri == seed) continue;
       scan_node = ns.node[j];
-      test_triangle(ns.k[j], ns.leaf[j]);
+      evaluate(t, ns.k[j], ns.leaf[j]);
     }
     ++counters.near_served;
     counters.near_tested += ns.n;
@@ -245,17 +251,26 @@ class Query::DistanceSearch {
     const LeafTri& t = tris[k];
     if (stamp_[t.tri] == qid) return;
     stamp_[t.tri] = qid;
+    evaluate(t, k, leaf);
+  }
+
+  /// test_triangle's work after the once-per-query check: the exact closest point, and the best
+  /// or the renewal's collector. The key (a load from an array over all triangles, out of core)
+  /// is read only when it can decide.
+  void evaluate(const LeafTri& t, std::uint32_t k, std::uint32_t leaf) {
     ++counters.triangles_tested;
     const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
     const double d2 = squared_norm(q - p);
-    const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
     if (B.collect) {  // a certificate's renewal: the collector keeps it and sets the prune radius
+      const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
       B.best = B.collect->offer(d2, q, key, t, TriangleSite{B.collect_page, k, leaf, scan_node});
       B.best2 = B.best * B.best;  // the prune radius, for the triangles' box test
       lim2 = (B.best + tol) * (B.best + tol);
       return;
     }
-    if (d2 < B.best2 || (d2 == B.best2 && key < B.key)) {
+    if (d2 > B.best2) return;
+    const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
+    if (d2 < B.best2 || key < B.key) {
       B.best2 = d2;
       B.best = std::sqrt(d2);
       B.key = key;
