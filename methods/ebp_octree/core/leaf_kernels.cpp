@@ -81,14 +81,14 @@ unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], f
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
-unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate) {
   unsigned hit = 0;
 #if defined(__SSE2__)
   // Lane 3 of the vertex rows is not a coordinate: the box's lane 3 lets it always pass.
   const __m128 LO = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), HI = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    if (t.flags & kDegenerate) continue;
+    if (!with_degenerate && (t.flags & kDegenerate)) continue;
     const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
     const __m128 tlo = _mm_min_ps(_mm_min_ps(A, B), C), thi = _mm_max_ps(_mm_max_ps(A, B), C);
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(thi, LO), _mm_cmpgt_ps(tlo, HI))) == 0) hit |= 1u << j;
@@ -96,7 +96,7 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
 #else
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    if (t.flags & kDegenerate) continue;
+    if (!with_degenerate && (t.flags & kDegenerate)) continue;
     bool meets = true;
     for (int a = 0; a < 3; ++a) {
       const float tl = std::min(std::min(t.a[a], t.b[a]), t.c[a]), th = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
@@ -246,7 +246,8 @@ EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
-EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3],
+                               bool with_degenerate) {
   // Two triangles per register (j in the low half, j + 4 in the high half); lane 3 of each half
   // is not a coordinate and always passes.
   const __m128 lo4 = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), hi4 = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
@@ -262,6 +263,7 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
     miss |= ((out & 15u) ? 1u : 0u) << j;
     miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
   }
+  if (with_degenerate) return ~miss & low_bits(m);
   const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(gather_flags(blk, m), 30))));
   return ~(miss | deg) & low_bits(m);
 }

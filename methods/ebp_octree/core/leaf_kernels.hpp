@@ -54,10 +54,11 @@ struct LeafKernelTable {
   /// reference is on triangle j's outer side (a sub-reference's mask, Octree::sub_sides), or
   /// kRefSidesFromFlags for the leaf's reference point (kRefPositive).
   unsigned (*plane_pass)(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8], unsigned ref_sides);
-  /// Box pass of the coherent step over blk[0, m), 1 <= m <= 8: the bit mask of the
-  /// non-degenerate triangles whose float bounding box (min/max of their float vertices: exact)
-  /// meets the closed box [lo, hi].
-  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]);
+  /// Box pass of a near set's gathering over blk[0, m), 1 <= m <= 8: the bit mask of the
+  /// triangles whose float bounding box (min/max of their float vertices: exact) meets the closed
+  /// box [lo, hi]; the kDegenerate ones (zero area) only `with_degenerate` (a distance needs
+  /// them, a segment crosses none).
+  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate);
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);

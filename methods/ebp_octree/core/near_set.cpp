@@ -65,11 +65,6 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
       bhi[a][j] = std::max({tr.a[a], tr.b[a], tr.c[a]});
     }
   };
-  auto meets = [&](const LeafTri& tr) {
-    for (int a = 0; a < 3; ++a)
-      if (std::max({tr.a[a], tr.b[a], tr.c[a]}) < lo[a] || std::min({tr.a[a], tr.b[a], tr.c[a]}) > hi[a]) return false;
-    return true;
-  };
   for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
     for (std::uint32_t y = r0[1]; y <= r1[1] && ok; ++y)
       for (std::uint32_t x = r0[0]; x <= r1[0] && ok; ++x) {
@@ -87,11 +82,8 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
             const std::uint32_t first_in_leaf = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
             const std::uint32_t first = lf.tri_begin + first_in_leaf;
             const unsigned m = std::min(lf.tri_count - first_in_leaf, kBlockTris);
-            unsigned hit = K.box_pass(tris + first, m, lo, hi);
-            if (with_degenerate)  // box_pass leaves zero-area triangles out; a distance cannot
-              for (unsigned l = 0; l < m; ++l)
-                if ((tris[first + l].flags & kDegenerate) && meets(tris[first + l])) hit |= 1u << l;
-            for (; hit && ok; hit &= hit - 1) add(first + unsigned(__builtin_ctz(hit)), nd.index, ni);
+            for (unsigned hit = K.box_pass(tris + first, m, lo, hi, with_degenerate); hit && ok; hit &= hit - 1)
+              add(first + unsigned(__builtin_ctz(hit)), nd.index, ni);
           }
       }
   if (!ok) {

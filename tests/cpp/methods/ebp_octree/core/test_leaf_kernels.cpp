@@ -48,11 +48,11 @@ unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3]
   }
   return mask;
 }
-unsigned box_mask_spelled_out(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3]) {
+unsigned box_mask_spelled_out(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate) {
   unsigned mask = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    bool meets = !(t.flags & kDegenerate);
+    bool meets = with_degenerate || !(t.flags & kDegenerate);
     for (int a = 0; a < 3; ++a)
       meets = meets && std::max({t.a[a], t.b[a], t.c[a]}) >= lo[a] && std::min({t.a[a], t.b[a], t.c[a]}) <= hi[a];
     if (meets) mask |= 1u << j;
@@ -145,7 +145,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
     const Octree t = build(m);
     std::mt19937_64 rng(21);
     std::uniform_real_distribution<double> U(-1, 1);
-    std::size_t blocks = 0, partial = 0, nonzero = 0, edge_zero = 0, j0 = 0;
+    std::size_t blocks = 0, partial = 0, nonzero = 0, edge_zero = 0, degenerate_met = 0, j0 = 0;
     for (const Leaf& lf : t.leaves) {
       const double half = 0.5 * t.cell_size(t.leaf_level);
       for (std::uint32_t k = 0; k < lf.tri_count; k += kBlockTris) {
@@ -167,7 +167,16 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           const unsigned sides = unsigned(rng() & 0xFF);  // a sub-reference's sides, any
           float want_s2[8], s2[8];
           const unsigned want_sides = plane_mask_spelled_out(blk, n, p, lf.eps, want_s2, sides);
-          const unsigned want_box = box_mask_spelled_out(blk, n, lo, hi);
+          // the block again with some triangles flagged zero-area (the meshes have none): the box
+          // pass leaves them out unless asked for them
+          LeafTri flagged[kBlockTris];
+          std::copy(blk, blk + n, flagged);
+          const unsigned deg_mask = unsigned(rng() & 0xFF);
+          for (unsigned j = 0; j < n; ++j)
+            if (deg_mask >> j & 1u) flagged[j].flags |= kDegenerate;
+          const unsigned want_box[2] = {box_mask_spelled_out(flagged, n, lo, hi, false),
+                                        box_mask_spelled_out(flagged, n, lo, hi, true)};
+          degenerate_met += want_box[0] != want_box[1];
           nonzero += want != 0;
           const unsigned nb = std::min((lf.tri_count - k + kBlockTris - 1) / kBlockTris, 8u);
           const BlockBox* boxes = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()] + k / kBlockTris;
@@ -204,7 +213,9 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(0, std::memcmp(s, want_s, n * sizeof(float))) << name << " kernel " << int(kind);
             ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s2, sides), want_sides) << name << " kernel " << int(kind);
             ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
-            ASSERT_EQ(K.box_pass(blk, n, lo, hi), want_box) << name << " kernel " << int(kind);
+            for (const bool with_degenerate : {false, true})
+              ASSERT_EQ(K.box_pass(flagged, n, lo, hi, with_degenerate), want_box[with_degenerate])
+                  << name << " kernel " << int(kind) << " with_degenerate " << with_degenerate;
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
             K.box_distances(all, nall, Vec3d(pd[0], pd[1], pd[2]), d2.data());
             ASSERT_EQ(0, std::memcmp(d2.data(), want_d2.data(), nall * sizeof(double))) << name << " kernel " << int(kind);
@@ -219,6 +230,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
     EXPECT_GT(partial, 10u) << name;
     EXPECT_GT(edge_zero, 100u) << name;  // segments through vertices: the exact fallback ran
     EXPECT_GT(nonzero, blocks) << name;
+    EXPECT_GT(degenerate_met, 100u) << name;  // flagged triangles in the box: the two modes differ
   }
   if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
 }
