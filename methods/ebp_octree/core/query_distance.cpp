@@ -268,7 +268,7 @@ class Query::DistanceSearch {
       lim2 = (B.best + tol) * (B.best + tol);
       return;
     }
-    if (d2 > B.best2) return;
+    if (!(d2 <= B.best2)) return;  // (a NaN never wins, as before)
     const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
     if (d2 < B.best2 || key < B.key) {
       B.best2 = d2;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -97,6 +98,39 @@ TEST(EbpQuery, OpenAndDegenerateInputs) {
   }
   EXPECT_THROW(Octree::build({}, {}, BuildParams{}), std::invalid_argument);
   EXPECT_THROW(Octree::build({{0, 0, 0}}, {{0, 0, 1}}, BuildParams{}), std::invalid_argument);
+}
+
+// Triangles with two equal vertices (zero area: the closest point of a segment) first in the
+// mesh, so that their keys are the smallest and win every tie: paths slide past them on both
+// sides of the surface, coherent (seeds, near sets, certificates) and not, and every answer is
+// the reference's.
+TEST(EbpQuery, TrianglesWithTwoEqualVerticesFirst) {
+  Mesh m = icosphere(2);
+  std::vector<std::array<std::uint32_t, 3>> slivers;
+  for (std::uint32_t i = 0; i + 1 < 24; i += 2) slivers.push_back({i, i, i + 1});
+  m.triangles.insert(m.triangles.begin(), slivers.begin(), slivers.end());
+  const Octree t = build(m);
+  const Reference ref(m.vertices, m.triangles);
+  const Vec3d c{0.1, -0.2, 0.3};  // icosphere's centre
+  Query plain(t, false), coherent(t, true);
+  int won_by_sliver = 0;
+  for (const auto& s : slivers) {
+    const Vec3d a = m.vertices[s[0]], b = m.vertices[s[2]];
+    for (int k = 0; k <= 60; ++k) {
+      const Vec3d on = a + (b - a) * (k / 60.0);
+      const Vec3d p = c + (on - c) * (1.0 + (k % 2 ? 2e-3 : -2e-3));
+      std::int64_t want_tri;
+      const double want = ref.dist(p, &want_tri);
+      for (Query* q : {&plain, &coherent}) {
+        const DistanceAnswer r = q->distance(p);
+        ASSERT_EQ(std::fabs(r.distance), want) << k;
+        ASSERT_EQ(r.triangle, want_tri) << k;  // ties to the lowest index, as the reference
+        won_by_sliver += r.triangle < std::int64_t(slivers.size());
+      }
+    }
+  }
+  EXPECT_GT(won_by_sliver, 100);  // the slivers did take part
+  EXPECT_GT(coherent.counters.near_served, 0u);  // and the coherent path's near sets
 }
 
 // Work counters are deterministic: exact values on a fixture (the cow, default parameters, 200
