@@ -19,7 +19,6 @@ beside the path the result names).
 """
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -79,8 +78,12 @@ def fmt_ratio(a, b, target=None):
         return "—"
     x = a / b
     mark = "" if target is None else (" ✔" if x >= target else " ✘")
-    # Truncated, not rounded: 1.995 against a 2x target prints 1.99 ✘, never 2.00 ✘.
-    return f"{math.floor(x * 100) / 100:.2f}×{mark}"
+    # Rounded to two decimals, except where that would print the target beside a ✘: 1.995
+    # against 2x prints 1.99 ✘, never 2.00 ✘.
+    shown = round(x, 2)
+    if target is not None and x < target <= shown:
+        shown = target - 0.01
+    return f"{shown:.2f}×{mark}"
 
 
 def main():

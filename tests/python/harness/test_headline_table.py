@@ -63,11 +63,13 @@ def test_contact_rows_per_band_and_speed(tmp_path):
     assert any(line.startswith("| cow (1,000) | 3.00 M |") and "| 3.00× ✔ | 1.50× ✔ |" in line for line in lines), p.stdout
 
 
-def test_ratio_is_truncated_so_its_mark_agrees_with_its_figure():
+def test_ratio_mark_agrees_with_its_figure():
     spec = importlib.util.spec_from_file_location("headline_table", ROOT / "tools" / "headline_table.py")
     headline_table = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(headline_table)
     assert headline_table.fmt_ratio(1.995, 1.0, 2.0) == "1.99× ✘"
     assert headline_table.fmt_ratio(2.0, 1.0, 2.0) == "2.00× ✔"
-    assert headline_table.fmt_ratio(0.9999, 1.0) == "0.99×"
+    assert headline_table.fmt_ratio(0.29, 1.0) == "0.29×"  # rounded, not truncated: 0.29 * 100 < 29
+    assert headline_table.fmt_ratio(1.006, 1.0) == "1.01×"
+    assert headline_table.fmt_ratio(0.9999, 1.0, 1.0) == "0.99× ✘"
     assert headline_table.fmt_ratio(1.0, None) == "—"
