@@ -18,7 +18,9 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import meshops
+from .noise import noise_eval, noise_params
 from .progress import log
+from .streamed_scan import write_scan_like
 
 
 @dataclass
@@ -226,33 +228,6 @@ def trefoil(ctx: Context, triangles: int, tube_radius: float) -> Generated:
     v = _sweep(center, normal, binormal, nv, tube_radius)
     f, _ = meshops.orient_outward(v, _tube_grid(nu, nv))
     return Generated(v, f, "procedural", [{"op": "trefoil_tube_grid", "nu": nu, "nv": nv}])
-
-
-def noise_params(rng: np.random.Generator, octaves: int, base_frequency: float, amplitude: float,
-                 waves: int) -> list:
-    """The random plane waves of multi-scale noise, octave by octave (amplitude halves, frequency
-    doubles per octave): [(wave vectors, phases, amplitude)]."""
-    params = []
-    for o in range(octaves):
-        w = rng.standard_normal((waves, 3))
-        w /= np.linalg.norm(w, axis=1, keepdims=True)
-        phase = rng.uniform(0, 2 * math.pi, waves)
-        params.append((w * (2 * math.pi * base_frequency * 2**o), phase,
-                       amplitude * 0.5**o * math.sqrt(2.0 / waves)))
-    return params
-
-
-def noise_eval(d: np.ndarray, params: list) -> np.ndarray:
-    """The noise of `params` (noise_params) at unit directions d, in chunks."""
-    out = np.zeros(len(d))
-    chunk = 1 << 20
-    for s in range(0, len(d), chunk):
-        dd = d[s:s + chunk]
-        acc = np.zeros(len(dd))
-        for w, phase, a in params:
-            acc += a * np.sin(dd @ w.T + phase).sum(1)
-        out[s:s + chunk] = acc
-    return out
 
 
 def _multiscale_noise(d: np.ndarray, rng: np.random.Generator, octaves: int, base_frequency: float,
@@ -486,7 +461,6 @@ def _streamed_only(ctx, **params):
 
 
 def _write_scan_like_streamed(path: str, **params) -> dict:
-    from .streamed_scan import write_scan_like  # imports this module: loaded when used
     return write_scan_like(path, **params)
 
 

@@ -24,7 +24,7 @@ import os
 
 import numpy as np
 
-from .families import noise_params, noise_eval
+from .noise import noise_eval, noise_params
 from .ply import ply_header
 from .progress import log
 

@@ -7,9 +7,9 @@
 # command line into OUTDIR, put into a copy of libebp_octree_core.a, and bvhbench is relinked
 # there with the build's link line.
 #
-#   tools/build_noinline_variant.sh BUILD_DIR OUTDIR      # writes OUTDIR/bvhbench_noinline
+#   tools/investigations/build_noinline_variant.sh BUILD_DIR OUTDIR      # writes OUTDIR/bvhbench_noinline
 #
-# The extra calls cost 3-6 % of the search's instructions (DESIGN.md, "Haptic distance: where the
+# The extra calls cost 3-6 % of the search's instructions (methods/ebp_octree/HISTORY.md, "Haptic distance: where the
 # time goes"); use the project's binary for totals, this one for the split.
 set -euo pipefail
 BUILD=$(cd "$1" && pwd) OUT=$(mkdir -p "$2" && cd "$2" && pwd)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Instructions per haptic distance query (callgrind), EBP-Octree coherent and not, Embree coherent.
 #
-#   tools/haptic_distance_callgrind.sh BVHBENCH NAME MESH QUERIES OUTDIR [METHOD...]
+#   tools/investigations/haptic_distance_callgrind.sh BVHBENCH NAME MESH QUERIES OUTDIR [METHOD...]
 #
 # BVHBENCH the runner (build/bvhbench, or a variant of it), QUERIES a set of `bvhbench queries
 # --kind haptic`. For each METHOD (default: ebp_octree:coherent=true ebp_octree
@@ -11,7 +11,7 @@
 # OUTDIR/NAME__METHOD.txt (and with `--tree=caller`, call counts per caller, into .tree.txt) and
 # the run's result (counters per query) into OUTDIR/NAME__METHOD.json. --repeat 1 is a warm-up
 # pass, one timed pass and the latency pass: 3 calls per query (see the caller tree). The script
-# prints the total instructions collected; tools/callgrind_split.py turns them into a table.
+# prints the total instructions collected; tools/investigations/callgrind_split.py turns them into a table.
 # Counts do not depend on the machine's load; they do on the compiler and the libraries.
 set -euo pipefail
 B=$1 NAME=$2 MESH=$3 Q=$4 OUT=$5

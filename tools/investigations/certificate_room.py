@@ -16,13 +16,13 @@ Run (from the repository root, after `cmake --build build`):
 
     build/bvhbench queries --mesh M --kind haptic --n 20000 --seed 1 --out Q.npy
     build/bvhbench truth   --mesh M --queries Q.npy --out T.npz
-    python3 tools/certificate_room.py --mesh M --queries Q.npy --truth T.npz \
+    python3 tools/investigations/certificate_room.py --mesh M --queries Q.npy --truth T.npz \
         [--today INSTR --tri-instr INSTR --inside-instr INSTR] [--max-centres 2000] \
         [--only REGEX] [--json OUT.json] [--name NAME]
 
 M is an OBJ or a binary little-endian PLY (as datasets-scripts writes). --today is the
 instructions per query of today's (coherent, unsigned) search and --tri-instr the instructions
-per exact triangle test in it (both from callgrind, DESIGN.md "Haptic distance: where the time
+per exact triangle test in it (both from callgrind, methods/ebp_octree/HISTORY.md, "Haptic distance: where the time
 goes"), --inside-instr today's coherent inside (the sign); without them only the geometry is
 reported. |S| is counted at up to --max-centres certificates per rule (evenly sampled; the
 served counts are over all of them). The model of the certificate path:
@@ -50,7 +50,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "datasets-scripts"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "datasets-scripts"))
 from bvhdata.ply import read_ply  # noqa: E402
 
 

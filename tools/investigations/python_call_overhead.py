@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The cost of calling a method written in Python, per query and per batch call.
 
-    .venv/bin/python tools/python_call_overhead.py [--exe build/bvhbench] [--mesh M] [--n 100000]
+    .venv/bin/python tools/investigations/python_call_overhead.py [--exe build/bvhbench] [--mesh M] [--n 100000]
 
 Makes a *null* Python method in a temporary folder (its answers are constants, so what is timed
 is the host: taking the GIL, building the arguments, the interpreter's call, checking and
@@ -20,7 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 NULL = '''
 import numpy as np

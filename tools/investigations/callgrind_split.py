@@ -1,15 +1,15 @@
 #!/usr/bin/env python3
 """Instructions per query of a haptic distance run, split by the steps of the search.
 
-Reads what tools/haptic_distance_callgrind.sh writes (OUTDIR/NAME__METHOD.tree.txt, the output
+Reads what tools/investigations/haptic_distance_callgrind.sh writes (OUTDIR/NAME__METHOD.tree.txt, the output
 of `callgrind_annotate --inclusive=yes --tree=caller`, and the run's result JSON beside it) and
 prints one Markdown row per run: inclusive instructions per call of the adapter's distance method
 and of the steps below it, with the run's work counters per query.
 
-    python3 tools/callgrind_split.py OUTDIR [--noinline OUTDIR_NOINLINE] [--inside INSIDE_DIR]
+    python3 tools/investigations/callgrind_split.py OUTDIR [--noinline OUTDIR_NOINLINE] [--inside INSIDE_DIR]
 
 OUTDIR holds the runs of the project's binary. OUTDIR_NOINLINE, if given, holds runs of a binary
-whose only change is `__attribute__((noinline))` on the DistanceSearch steps (see DESIGN.md,
+whose only change is `__attribute__((noinline))` on the DistanceSearch steps (see methods/ebp_octree/HISTORY.md,
 "Haptic distance: where the time goes"): there every step is a function of its own, so the leaf
 scan splits into block bounds (order_blocks), triangle pre-tests (triangle_pruned) and exact
 tests (test_triangle). INSIDE_DIR holds `bvhbench run --query inside` results of the same
