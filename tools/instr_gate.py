@@ -26,13 +26,13 @@ import datetime
 import hashlib
 import json
 import os
-import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_EXE = os.environ.get("BVHBENCH_EXE", str(ROOT / "build" / "bvhbench"))
 SCHEMA = "bvhbench.instructions/1"
 FAIL_DEFAULT = 0.10
 WARN_DEFAULT = 0.03
@@ -44,47 +44,24 @@ class BrokenRun(Exception):
 
 # ---- the job list -------------------------------------------------------------------------------
 
-def _method_spec(m):
-    if isinstance(m, str):
-        return m
-    params = m.get("params") or {}
-    if not params:
-        return m["name"]
-    kv = ",".join(f"{k}={str(v).lower() if isinstance(v, bool) else v}" for k, v in sorted(params.items()))
-    return f"{m['name']}:{kv}"
-
-
-def load_jobs(path):
-    """The jobs of a job list (suites/ci_instructions.yml): dicts with id, mesh, queries, query, method."""
-    import yaml
-    path = Path(path)
+def load_jobs(path, exe):
+    """The jobs of a job list (suites/ci_instructions.yml) as the runner `exe` expands it
+    (`bvhbench suite FILE --list --json`; nothing else reads the suite grammar): dicts with id,
+    mesh (path), queries (kind, label, and generator_args or a points file), query, method (spec)
+    and threads."""
+    cmd = [str(exe), "suite", str(path), "--list", "--json"]
     try:
-        doc = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as e:
-        raise BrokenRun(f"{path}: cannot read the job list: {e}")
-    if not isinstance(doc, dict) or not isinstance(doc.get("matrices"), list):
-        raise BrokenRun(f"{path}: expected a 'matrices' list")
-    jobs = []
-    for mi, mx in enumerate(doc["matrices"]):
-        for key in ("meshes", "queries", "query", "methods"):
-            if not isinstance(mx.get(key), list) or not mx[key]:
-                raise BrokenRun(f"{path}: matrices[{mi}].{key}: expected a non-empty list")
-        for mesh in mx["meshes"]:
-            mesh_path = (path.parent / mesh).resolve()
-            for q in mx["queries"]:
-                qtag = f"{q['kind']}-n{q['n']}-s{q.get('seed', 1)}"
-                for qt in mx["query"]:
-                    if qt not in ("inside", "distance"):
-                        raise BrokenRun(f"{path}: matrices[{mi}].query: '{qt}' is not inside or distance")
-                    for m in mx["methods"]:
-                        spec = _method_spec(m)
-                        jid = f"{mesh_path.stem}__{qtag}__{qt}__{re.sub(r'[^A-Za-z0-9_.=-]+', '_', spec)}"
-                        jobs.append({"id": jid, "mesh": str(mesh_path), "queries": dict(q, tag=qtag),
-                                     "query": qt, "method": spec})
-    ids = [j["id"] for j in jobs]
-    if len(ids) != len(set(ids)):
-        raise BrokenRun(f"{path}: two jobs share an id")
-    return jobs
+        p = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:
+        raise BrokenRun(f"cannot run {exe} to expand {path}: {e} (build it, or pass --exe / --list-exe)")
+    if p.returncode != 0:
+        raise BrokenRun(f"{path}: the runner refused the job list (exit {p.returncode}): {p.stderr.strip()}")
+    try:
+        listed = json.loads(p.stdout)["jobs"]
+    except (ValueError, KeyError) as e:
+        raise BrokenRun(f"{' '.join(cmd)}: not a job listing ({e}): is {exe} older than `suite --list --json`?")
+    return [{"id": j["id"], "mesh": str(Path(j["mesh"]["path"]).resolve()), "queries": j["queries"], "query": j["query"],
+             "method": j["method"]["spec"], "threads": j["threads"]} for j in listed]
 
 
 # ---- measuring ----------------------------------------------------------------------------------
@@ -106,11 +83,12 @@ def callgrind_total(path):
 
 def _queries_file(exe, job, data_dir):
     q = job["queries"]
-    out = data_dir / f"{Path(job['mesh']).stem}__{q['tag']}.npy"
+    if "file" in q:  # a points file, replayed as it is
+        return Path(q["file"])
+    out = data_dir / f"{Path(job['mesh']).stem}__{q['label']}.npy"
     if not out.exists():
         data_dir.mkdir(parents=True, exist_ok=True)
-        args = [str(exe), "queries", "--mesh", job["mesh"], "--kind", q["kind"], "--n", str(q["n"]),
-                "--seed", str(q.get("seed", 1)), "--out", str(out)]
+        args = [str(exe), "queries", "--mesh", job["mesh"], *q["generator_args"], "--out", str(out)]
         p = subprocess.run(args, capture_output=True, text=True)
         if p.returncode != 0:
             raise BrokenRun(f"{job['id']}: could not make its query set: {' '.join(args)}\n{p.stderr}")
@@ -134,7 +112,7 @@ def measure_job(exe, job, out_dir, toggle_fallback=True):
     for d in (cg.parent, res.parent, log.parent):
         d.mkdir(parents=True, exist_ok=True)
     run = [str(exe), "run", "--mesh", job["mesh"], "--method", job["method"], "--queries", str(qfile),
-           "--query", job["query"], "--repeat", "1", "--threads", "1", "--quiet", "--out", str(res)]
+           "--query", job["query"], "--repeat", "1", "--threads", str(job.get("threads", 1)), "--quiet", "--out", str(res)]
     # The timed pass switches instrumentation and collection on itself (counted_region.hpp); a
     # binary made before it had the region is counted by the name of its timed pass instead.
     modes = [("region", ["--instr-atstart=no", "--collect-atstart=no"])]
@@ -392,7 +370,7 @@ def append_history(doc, history_root):
 # ---- the commands -------------------------------------------------------------------------------
 
 def _jobs_arg(args):
-    jobs = load_jobs(args.jobs)
+    jobs = load_jobs(args.jobs, args.list_exe or args.exe)
     if args.only:
         wanted = set(args.only)
         unknown = wanted - {j["id"] for j in jobs}
@@ -447,7 +425,7 @@ def cmd_gate(args):
 
 
 def cmd_one(args):
-    jobs = [j for j in load_jobs(args.jobs) if j["id"] == args.job]
+    jobs = [j for j in load_jobs(args.jobs, args.list_exe) if j["id"] == args.job]
     if not jobs:
         raise BrokenRun(f"no job '{args.job}' in {args.jobs}")
     rec = measure_job(Path(args.exe).resolve(), jobs[0], Path(args.out))
@@ -463,8 +441,9 @@ def main(argv=None):
     sub = ap.add_subparsers(dest="cmd", required=True)
 
     def common(p, out_default):
-        p.add_argument("--exe", default=os.environ.get("BVHBENCH_EXE", str(ROOT / "build" / "bvhbench")))
+        p.add_argument("--exe", default=DEFAULT_EXE)
         p.add_argument("--jobs", default=str(ROOT / "suites" / "ci_instructions.yml"), help="job list")
+        p.add_argument("--list-exe", help="the bvhbench that expands the job list (default: --exe)")
         p.add_argument("--only", action="append", help="only this job id (repeatable)")
         p.add_argument("--out", default=out_default)
         p.add_argument("--parallel", type=int, default=2, help="jobs under valgrind at once")
@@ -493,6 +472,9 @@ def main(argv=None):
     p = sub.add_parser("one", help="print one job's instructions per query")
     p.add_argument("--exe", default=str(ROOT / "build" / "bvhbench"))
     p.add_argument("--jobs", default=str(ROOT / "suites" / "ci_instructions.yml"))
+    # A bisection step measures an older commit's binary: the jobs are this checkout's.
+    p.add_argument("--list-exe", default=DEFAULT_EXE,
+                   help="the bvhbench that expands the job list (default: $BVHBENCH_EXE or build/bvhbench)")
     p.add_argument("--job", required=True)
     p.add_argument("--out", required=True, help="scratch folder")
     p.set_defaults(fn=cmd_one)

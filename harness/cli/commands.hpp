@@ -10,6 +10,7 @@ namespace CLI { class App; }
 namespace bvhbench {
 
 void add_methods_command(CLI::App& app);    // methods_command.cpp
+void add_kinds_command(CLI::App& app);      // kinds_command.cpp
 void add_queries_command(CLI::App& app);    // queries_command.cpp
 void add_run_command(CLI::App& app);        // run_command.cpp
 void add_suite_command(CLI::App& app);      // suite_command.cpp

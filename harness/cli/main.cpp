@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
 
   try {
     add_methods_command(app);
+    add_kinds_command(app);
     add_queries_command(app);
     add_truth_command(app);
     add_run_command(app);

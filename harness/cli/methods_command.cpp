@@ -1,6 +1,5 @@
 // `bvhbench methods`: what is registered, what it answers, which of its counters depend on the
 // machine, its options (type, role, default) and the default sweep a `methods: all` suite runs.
-#include <iomanip>
 #include <map>
 #include <iostream>
 
@@ -8,16 +7,12 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/cli/commands.hpp"
+#include "harness/cli/param_listing.hpp"
 #include "harness/core/registry.hpp"
 
 namespace bvhbench {
 
 namespace {
-
-/// Every option's default as results record it (canonical: a real declared "1.0" is "1").
-std::map<std::string, std::string> canonical_defaults(const MethodInfo& m) {
-  return Params::resolve(m.name, m.params, {}).values();
-}
 
 nlohmann::json method_json(const MethodInfo& m) {
   nlohmann::json j;
@@ -33,19 +28,7 @@ nlohmann::json method_json(const MethodInfo& m) {
                        : m.caps.build_threads == BuildThreads::one ? "one"
                                                                    : "library";
   j["testing_only"] = m.testing_only;
-  nlohmann::json ps = nlohmann::json::array();
-  const auto defaults = canonical_defaults(m);
-  for (auto& p : m.params) {
-    nlohmann::json pj = {{"name", p.name},                  {"type", to_string(p.type)}, {"role", to_string(p.role)},
-                         {"default", defaults.at(p.name)}, {"help", p.help}};
-    if (!p.choices.empty()) pj["choices"] = p.choices;
-    if (p.type == ParamType::integer || p.type == ParamType::real) {
-      if (p.min > -1e308) pj["min"] = p.min;
-      if (p.max < 1e308) pj["max"] = p.max;
-    }
-    ps.push_back(pj);
-  }
-  j["params"] = ps;
+  j["params"] = params_json("method " + m.name, m.params);
   j["sweep"] = m.sweep;  // what a suite's `methods: all` runs of it
   // Counters compare gates exactly only against a baseline of the same machine fingerprint.
   j["machine_dependent_counters"] = m.machine_dependent_counters;
@@ -97,17 +80,7 @@ void add_methods_command(CLI::App& app) {
                 << (machine.empty() ? "none (every counter depends on the input alone)"
                                     : machine + " (gated only against a baseline of the same machine fingerprint)")
                 << "\n";
-      if (m.params.empty()) std::cout << "  parameters: none\n";
-      const auto defaults = canonical_defaults(m);
-      for (auto& p : m.params) {
-        std::string type = to_string(p.type);
-        if (!p.choices.empty()) {
-          type.clear();
-          for (auto& c : p.choices) type += (type.empty() ? "" : "|") + c;
-        }
-        std::cout << "  " << std::left << std::setw(18) << p.name << std::setw(22)
-                  << ("= " + defaults.at(p.name)) << "(" << type << ", " << to_string(p.role) << ") " << p.help << "\n";
-      }
+      print_params(std::cout, "method " + m.name, m.params);
       std::string sweep;
       for (const auto& e : m.sweep) sweep += (sweep.empty() ? "" : "; ") + (e.empty() ? std::string("defaults") : e);
       std::cout << "  methods: all runs: " << (m.sweep.empty() ? "none (not in methods: all)" : sweep) << "\n";

@@ -12,6 +12,7 @@
 #include "harness/io/mesh_io.hpp"
 #include "harness/io/query_set_io.hpp"
 #include "harness/util/errors.hpp"
+#include "harness/util/key_value.hpp"
 
 namespace bvhbench {
 
@@ -34,16 +35,11 @@ void add_queries_command(CLI::App& app) {
   cmd->add_option("--param", o->params, "Generator parameter key=value (repeatable)");
   cmd->add_option("--out", o->out, "Output .npy (its .json sidecar is written beside it)")->required();
   cmd->callback([o] {
-    std::map<std::string, double> given;
-    for (auto& kv : o->params) {
-      auto eq = kv.find('=');
-      if (eq == std::string::npos) throw InputError("--param '" + kv + "': expected key=value");
-      char* end = nullptr;
-      std::string v = kv.substr(eq + 1);
-      double d = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end) throw InputError("--param '" + kv + "': value is not a number");
-      given[kv.substr(0, eq)] = d;
-    }
+    // Checked against the kind's declaration before the mesh is read (query_set.hpp).
+    std::map<std::string, std::string> text;
+    for (auto& kv : o->params) add_key_value(kv, "--param", text);
+    const QueryKind& kind = query_kind(o->kind);
+    const std::map<std::string, double> given = query_param_values(kind, query_kind_params(kind, text));
     if (o->out.size() < 4 || o->out.compare(o->out.size() - 4, 4, ".npy") != 0)
       throw InputError("--out " + o->out + ": must end in .npy");
     // The output folder is checked before the (possibly long) generation: a missing or

@@ -28,7 +28,7 @@ void add_suite_command(CLI::App& app) {
   struct Opts {
     std::string file, out, filter, data_dir, executor = "local", scheduler, worker_exe;
     int dask_workers = 0;
-    bool resume = false, list = false, no_truth = false;
+    bool resume = false, list = false, json = false, no_truth = false;
     double timeout_s = -1, memory_limit_mb = -1;
     int repeat = -1;
   };
@@ -38,10 +38,13 @@ void add_suite_command(CLI::App& app) {
                   "Suite file (suites/*.yml): meshes x query sets (generated, or points files given as "
                   "{file: PATH}) x queries x methods; format in suites/README.md")
       ->required();
-  cmd->add_option("--out", o->out, "Result folder (results/NAME)")->required();
+  cmd->add_option("--out", o->out, "Result folder (results/NAME; not needed with --list)");
   cmd->add_flag("--resume", o->resume, "Skip jobs whose result is already written");
   cmd->add_option("--filter", o->filter, "Run only jobs whose id matches this regex");
-  cmd->add_flag("--list", o->list, "Print the expanded job ids and exit");
+  cmd->add_flag("--list", o->list, "Print the expanded job ids and exit, running nothing");
+  cmd->add_flag("--json", o->json,
+                "With --list: every job as JSON (id, mesh, query set, query, method and its canonical key, threads, "
+                "repeat): what tools read instead of the suite file");
   cmd->add_option("--timeout", o->timeout_s, "Per-job time limit in seconds (overrides the suite)");
   cmd->add_option("--memory-limit", o->memory_limit_mb, "Per-job address-space limit in MiB (overrides the suite)");
   cmd->add_option("--repeat", o->repeat, "Timed passes per job (overrides the suite)");
@@ -77,9 +80,13 @@ void add_suite_command(CLI::App& app) {
     for (auto& j : cfg.jobs)
       if (std::regex_search(j.id, re)) jobs.push_back(j);
     if (o->list) {
-      for (auto& j : jobs) std::cout << j.id << "\n";
+      if (o->json) std::cout << suite_jobs_json(cfg, jobs).dump(1) << "\n";
+      else
+        for (auto& j : jobs) std::cout << j.id << "\n";
       return;
     }
+    if (o->json) throw InputError("--json goes with --list");
+    if (o->out.empty()) throw InputError("--out is required (a result folder, results/NAME)");
     SuiteRunOptions run;
     run.out = o->out;
     run.data_dir = o->data_dir;

@@ -1,6 +1,7 @@
 #include "harness/core/method_spec.hpp"
 
 #include "harness/util/errors.hpp"
+#include "harness/util/key_value.hpp"
 
 namespace bvhbench {
 
@@ -16,14 +17,7 @@ MethodSpec parse_method_spec(const std::string& text) {
   while (pos <= rest.size()) {
     const std::size_t comma = rest.find(',', pos);
     const std::string pair = rest.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    if (!pair.empty()) {
-      const auto eq = pair.find('=');
-      if (eq == std::string::npos || eq == 0)
-        throw InputError("method spec '" + text + "': '" + pair + "' is not key=value");
-      const std::string k = pair.substr(0, eq), v = pair.substr(eq + 1);
-      if (spec.given.count(k)) throw InputError("method spec '" + text + "': '" + k + "' given twice");
-      spec.given[k] = v;
-    }
+    if (!pair.empty()) add_key_value(pair, "method spec '" + text + "'", spec.given);
     if (comma == std::string::npos) break;
     pos = comma + 1;
   }

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstdlib>
 #include <sstream>
 
 #include "harness/util/errors.hpp"
+#include "harness/util/nearest_word.hpp"
+#include "harness/util/text_number.hpp"
 
 namespace bvhbench {
 
@@ -52,38 +52,38 @@ bool parse_bool(const std::string& s, bool* out) {
 namespace {
 
 bool parse_int(const std::string& s, std::int64_t* out) {
-  if (s.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  long long v = std::strtoll(s.c_str(), &end, 10);
-  if (errno != 0 || *end != '\0') return false;
+  long long v = 0;
+  if (!bvhbench::parse_int(s, v)) return false;
   *out = v;
   return true;
 }
 
 bool parse_real(const std::string& s, double* out) {
-  if (s.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  double v = std::strtod(s.c_str(), &end);
-  if (errno != 0 || *end != '\0' || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
+  return parse_double(s, *out) && std::isfinite(*out);
+}
+
+// What a value out of p's range should have been: "out of range [a, b]", "must be > a", ...
+std::string range_text(const ParamSpec& p) {
+  const bool has_min = p.min > -1e308, has_max = p.max < 1e308;
+  std::ostringstream os;
+  if (has_min && has_max)
+    os << "out of range " << (p.min_excluded ? "(" : "[") << p.min << ", " << p.max << "]";
+  else if (has_min)
+    os << "must be " << (p.min_excluded ? "> " : ">= ") << p.min;
+  else
+    os << "must be <= " << p.max;
+  return os.str();
 }
 
 // Checks one value against its spec; returns it typed or throws.
-ParamValue typed_value(const std::string& method, const ParamSpec& p, const std::string& v) {
+ParamValue typed_value(const std::string& owner, const ParamSpec& p, const std::string& v) {
   auto bad = [&](const std::string& why) {
-    return InputError("method " + method + ": parameter " + p.name + "=" + v + ": " + why);
+    return InputError(owner + ": parameter " + p.name + "=" + v + ": " + why);
   };
   ParamValue out;
   out.type = p.type;
   auto range = [&](double x) {
-    if (x < p.min || x > p.max) {
-      std::ostringstream os;
-      os << "out of range [" << p.min << ", " << p.max << "]";
-      throw bad(os.str());
-    }
+    if (x < p.min || x > p.max || (p.min_excluded && x == p.min)) throw bad(range_text(p));
   };
   // A number may be declared with choices too (e.g. 1, 3 or 5 rays): its canonical text must be one.
   auto one_of = [&](const ParamValue& x) {
@@ -122,24 +122,37 @@ ParamValue typed_value(const std::string& method, const ParamSpec& p, const std:
 
 }  // namespace
 
-Params Params::resolve(const std::string& method, const std::vector<ParamSpec>& specs,
-                       const std::map<std::string, std::string>& given) {
+namespace {
+
+// An unknown key: the declared ones and, when one is close, the one probably meant.
+InputError unknown_parameter(const std::string& owner, const std::vector<ParamSpec>& specs, const std::string& key) {
+  std::string known;
+  std::vector<std::string> names;
+  for (auto& s : specs) {
+    known += (known.empty() ? "" : ", ") + s.name;
+    names.push_back(s.name);
+  }
+  const std::string nearest = nearest_word(key, names);
+  return InputError(owner + ": unknown parameter '" + key + "' (" +
+                    (nearest.empty() ? "" : "did you mean '" + nearest + "'? ") + "known: " +
+                    (known.empty() ? "none" : known) + ")");
+}
+
+}  // namespace
+
+Params Params::resolve_for(const std::string& owner, const std::vector<ParamSpec>& specs,
+                           const std::map<std::string, std::string>& given) {
   Params out;
   for (auto& kv : given) {
     const std::string& k = kv.first;  // a structured binding: a lambda may not capture it (C++17; clang refuses)
     auto it = std::find_if(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.name == k; });
-    if (it == specs.end()) {
-      std::string known;
-      for (auto& s : specs) known += (known.empty() ? "" : ", ") + s.name;
-      throw InputError("method " + method + ": unknown parameter '" + k + "' (known: " +
-                       (known.empty() ? "none" : known) + ")");
-    }
+    if (it == specs.end()) throw unknown_parameter(owner, specs, k);
   }
   for (auto& s : specs) {
-    out.defaults_[s.name] = typed_value(method, s, s.default_value);
+    out.defaults_[s.name] = typed_value(owner, s, s.default_value);
     auto it = given.find(s.name);
     if (it != given.end()) {
-      out.values_[s.name] = typed_value(method, s, it->second);
+      out.values_[s.name] = typed_value(owner, s, it->second);
       out.given_[s.name] = it->second;
     } else {
       out.values_[s.name] = out.defaults_[s.name];
@@ -154,7 +167,7 @@ Params Params::with_values(const std::string& method, const std::vector<ParamSpe
   for (const auto& [k, text] : read) {
     auto it = std::find_if(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.name == k; });
     if (it == specs.end()) throw std::logic_error("method " + method + " read an undeclared option " + k);
-    out.values_[k] = typed_value(method, *it, text);
+    out.values_[k] = typed_value("method " + method, *it, text);
   }
   return out;
 }

@@ -1,9 +1,12 @@
 #pragma once
-/// Method options: declared once by each method (name, type, role, default, help, range or
-/// choices), chosen on the command line as `NAME:key=value,key=value` (method_spec.hpp), checked
-/// and turned into typed values before anything is built. Everything else reads that one
-/// declaration: the canonical key results group by (printed from the typed values, so 5 and 5.0
-/// are one key), `bvhbench methods`, the values a method's constructor gets, a suite's sweeps.
+/// Typed parameters, the one declaration of both a method's options and a query kind's
+/// generator parameters: declared once (name, type, role, default, help, range or choices), given
+/// as text (a method as `NAME:key=value,key=value`, method_spec.hpp; a query kind's as
+/// `bvhbench queries --param k=v` or a suite's `params:`), checked and turned into typed values
+/// before anything is built or generated. Everything else reads that one declaration: the
+/// canonical key results group by (printed from the typed values, so 5 and 5.0 are one key),
+/// `bvhbench methods` and `bvhbench kinds`, the values a method's constructor or a generator
+/// gets, a suite's sweeps and its check of a query set's parameters.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -15,6 +18,7 @@ enum class ParamType { integer, real, boolean, text, choice };
 
 /// Whether an option shapes the structure (another value means another build) or only how the
 /// queries are asked of it. A structure read from a file (a store) carries its own build options.
+/// A query kind's parameters shape the query set: they are declared `query`.
 enum class ParamRole { build, query };
 
 struct ParamSpec {
@@ -25,6 +29,7 @@ struct ParamSpec {
   std::string help;
   std::vector<std::string> choices;  ///< for ParamType::choice
   double min = -1e308, max = 1e308;  ///< inclusive range for integer/real
+  bool min_excluded = false;         ///< the range is (min, max]: e.g. a speed, a length > 0
 };
 
 const char* to_string(ParamType t);
@@ -47,10 +52,16 @@ struct ParamValue {
 class Params {
  public:
   Params() = default;
-  /// Validates `given` against `specs`. Throws InputError naming the method, the key and the
-  /// problem for an unknown key, a value of the wrong type, out of range, or not a choice.
+  /// Validates `given` against `specs`. Throws InputError naming the owner, the key and the
+  /// problem for an unknown key (with the nearest declared one), a value of the wrong type, out
+  /// of range, or not a choice. `owner` begins the messages: "method NAME", "query kind 'K'".
+  static Params resolve_for(const std::string& owner, const std::vector<ParamSpec>& specs,
+                            const std::map<std::string, std::string>& given);
+  /// resolve_for("method " + method, ...): a method's options.
   static Params resolve(const std::string& method, const std::vector<ParamSpec>& specs,
-                        const std::map<std::string, std::string>& given);
+                        const std::map<std::string, std::string>& given) {
+    return resolve_for("method " + method, specs, given);
+  }
 
   /// These options with `read` (option -> text, e.g. a store's own build options) put in place
   /// of the values they name, checked against the same declaration. The defaults stay, so

@@ -8,10 +8,9 @@
 
 #include "harness/core/geometry.hpp"
 #include "harness/core/mesh.hpp"
+#include "harness/core/params.hpp"
 
 namespace bvhbench::query_kinds_detail {
-
-using Params = std::map<std::string, double>;
 
 std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
@@ -81,7 +80,8 @@ struct HapticLayout {
   double band = 0;             ///< contact band half-width, mesh units
   double approach_distance = 0;  ///< start distance from the surface, mesh units
 };
-/// Throws InputError (naming the kind and parameter) for a parameter out of range.
+/// `p`: the kind's resolved parameters (query_kind_params). Throws InputError (naming the kind
+/// and the parameters) for speeds that exceed max_speed together.
 HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_leave = true);
 
 }  // namespace bvhbench::query_kinds_detail

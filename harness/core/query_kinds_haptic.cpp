@@ -199,16 +199,11 @@ bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
 // ---------------------------------------------------------------------------------------------
 
 HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_leave) {
-  const std::string kind = approach_and_leave ? "haptic" : "contact";
-  auto get = [&](const char* key) {
-    const double v = p.at(key);
-    if (!(v > 0) || !std::isfinite(v))
-      throw InputError("query kind '" + kind + "': parameter " + key + " must be > 0");
-    return v;
-  };
+  // Each value is in its declared range (query_kinds.cpp: lengths, speeds and times > 0);
+  // what is checked here is how they bound each other.
+  auto get = [&](const char* key) { return p.get_real(key); };
   const double model = get("model_size_m"), rate = get("rate_hz"), vmax = get("max_speed");
   const double slide = get("slide_speed"), band_mm = get("band_mm"), contact_ms = get("contact_ms");
-  if (!(p.at("turn_rate") >= 0)) throw InputError("query kind '" + kind + "': turn_rate must be >= 0");
   const double diag = mesh.bounds().diagonal();
   if (!(diag > 0) || !std::isfinite(diag))
     throw InputError(mesh.path + ": the mesh has no extent to move a probe over");
@@ -240,9 +235,9 @@ namespace {
 std::vector<Vec3d> probe_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params,
                               bool approach_and_leave) {
   const HapticLayout L = haptic_layout(mesh, params, approach_and_leave);
-  const double rate = params.at("rate_hz"), dt = 1.0 / rate;
-  const double slide = params.at("slide_speed") * L.units_per_metre;  // units / s
-  const double turn_rate = params.at("turn_rate");
+  const double rate = params.get_real("rate_hz"), dt = 1.0 / rate;
+  const double slide = params.get_real("slide_speed") * L.units_per_metre;  // units / s
+  const double turn_rate = params.get_real("turn_rate");
   const double tau = 0.3;  // s, correlation time of the heading's angular velocity
   AreaSampler sampler(mesh);
   Progress progress_grid("haptic: triangle grid", 1, mesh.num_triangles() >= 2000000);

@@ -42,7 +42,7 @@ Vec3d uniform_in_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c, double
 
 std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed,
                                const Params& params) {
-  const double sigma = params.at("sigma") * mesh.bounds().diagonal();
+  const double sigma = params.get_real("sigma") * mesh.bounds().diagonal();
   if (!(sigma >= 0)) throw InputError("query kind 'near': sigma must be >= 0");
   AreaSampler sampler(mesh);
   Rng rng(seed);
@@ -58,7 +58,7 @@ std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t se
 
 std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t seed,
                                   const Params& params) {
-  const double pv = params.at("vertex_share"), pe = params.at("edge_share");
+  const double pv = params.get_real("vertex_share"), pe = params.get_real("edge_share");
   if (!(pv >= 0 && pe >= 0 && pv + pe <= 1 + 1e-12))
     throw InputError("query kind 'surface': vertex_share and edge_share must be >= 0 with a sum <= 1");
   if (mesh.num_triangles() == 0) throw InputError(mesh.path + ": the mesh has no triangle");

@@ -6,6 +6,7 @@
 
 #include "harness/core/mesh.hpp"
 #include "harness/util/errors.hpp"
+#include "harness/util/nearest_word.hpp"
 
 namespace bvhbench {
 
@@ -17,27 +18,47 @@ Box3d QuerySet::bounds() const {
 
 // ---------------------------------------------------------------------------------------------
 
+Params query_kind_params(const QueryKind& kind, const std::map<std::string, std::string>& given) {
+  return Params::resolve_for("query kind '" + kind.name + "'", kind.params, given);
+}
+
+Params query_kind_params(const QueryKind& kind, const std::map<std::string, double>& given) {
+  // Through the same check as text: the shortest text that reads back to each double (exact).
+  std::map<std::string, std::string> text;
+  for (const auto& [key, v] : given) {
+    ParamValue number;
+    number.type = ParamType::real;
+    number.real = v;
+    text[key] = number.canonical();
+  }
+  return query_kind_params(kind, text);
+}
+
+std::map<std::string, double> query_param_values(const QueryKind& kind, const Params& params) {
+  std::map<std::string, double> out;
+  for (const ParamSpec& p : kind.params) out[p.name] = params.get_real(p.name);
+  return out;
+}
+
+const QueryKind& query_kind(const std::string& name) {
+  if (const QueryKind* k = find_query_kind(name)) return *k;
+  std::string known;
+  std::vector<std::string> names;
+  for (auto& q : query_kinds()) {
+    known += (known.empty() ? "" : ", ") + q.name;
+    names.push_back(q.name);
+  }
+  const std::string nearest = nearest_word(name, names);
+  throw InputError("unknown query kind '" + name + "' (" + (nearest.empty() ? "" : "did you mean '" + nearest + "'? ") +
+                   "known: " + known + ")");
+}
+
 std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,
                                     nlohmann::json* meta) {
-  const QueryKind* k = find_query_kind(kind);
-  if (!k) {
-    std::string known;
-    for (auto& q : query_kinds()) known += (known.empty() ? "" : ", ") + q.name;
-    throw InputError("unknown query kind '" + kind + "' (known: " + known + ")");
-  }
-  std::map<std::string, double> params = k->defaults;
-  for (auto& [key, v] : given_params) {
-    if (!params.count(key)) {
-      std::string known;
-      for (auto& [d, _] : k->defaults) known += (known.empty() ? "" : ", ") + d;
-      throw InputError("query kind '" + kind + "': unknown parameter '" + key + "' (known: " +
-                       (known.empty() ? "none" : known) + ")");
-    }
-    if (!std::isfinite(v)) throw InputError("query kind '" + kind + "': parameter " + key + " is not finite");
-    params[key] = v;
-  }
+  const QueryKind* k = &query_kind(kind);
+  const Params params = query_kind_params(*k, given_params);
   auto pts = k->generate(mesh, n, seed, params);
   if (meta) {
     nlohmann::json m;
@@ -48,7 +69,7 @@ std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, s
     m["mesh_path"] = mesh.path;
     m["mesh_triangles"] = mesh.num_triangles();
     m["ordered"] = k->ordered;
-    m["params"] = params;
+    m["params"] = query_param_values(*k, params);
     m["created_by"] = "bvhbench queries";
     *meta = m;
   }

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/core/geometry.hpp"
+#include "harness/core/params.hpp"
 
 namespace bvhbench {
 
@@ -30,20 +31,30 @@ struct QuerySet {
   Box3d bounds() const;
 };
 
-/// A kind of query set. Registered in query_kinds.cpp (one line each).
+/// A kind of query set. Registered in query_kinds.cpp (one entry each).
 struct QueryKind {
   std::string name;
   std::string description;
-  /// Parameters with defaults (all recorded in the sidecar); user values override by key.
-  std::map<std::string, double> defaults;
+  /// Its generator's parameters, declared as a method's options are (real numbers with a
+  /// default, a help line and a range; all recorded in the sidecar); user values override by key.
+  std::vector<ParamSpec> params;
   /// Generates n points on `mesh` from `seed` with the resolved parameters.
-  std::function<std::vector<Vec3d>(const Mesh& mesh, std::size_t n, std::uint64_t seed,
-                                   const std::map<std::string, double>& params)>
+  std::function<std::vector<Vec3d>(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params)>
       generate;
   bool ordered = false;  ///< a path whose order matters (haptic)
 };
 
 const std::vector<QueryKind>& query_kinds();
+
+/// The kind's parameters: `given` (by name, as text: `--param`, a suite's `params:`) checked
+/// against its declaration, the others at their defaults. Throws InputError "query kind 'K': ..."
+/// for an unknown parameter (with the nearest declared one), a value that is not a finite number,
+/// or out of its range.
+Params query_kind_params(const QueryKind& kind, const std::map<std::string, std::string>& given);
+/// The same for values given as numbers (a sidecar's, a test's).
+Params query_kind_params(const QueryKind& kind, const std::map<std::string, double>& given);
+/// Every parameter's value, by name, as numbers (what a sidecar records as `params`).
+std::map<std::string, double> query_param_values(const QueryKind& kind, const Params& params);
 
 /// Whether T threads replay `qs` as T independent probes (a path of a registered ordered kind,
 /// such as haptic, made by the generator: its sidecar gives kind, seed and parameters), rather
@@ -61,9 +72,12 @@ std::uint64_t probe_seed(std::uint64_t seed, int k);
 /// build does not know).
 std::vector<std::vector<Vec3d>> probe_paths(const Mesh& mesh, const QuerySet& qs, int probes);
 const QueryKind* find_query_kind(const std::string& name);
+/// find_query_kind, or InputError "unknown query kind 'K' (known: ...)" with the nearest one.
+const QueryKind& query_kind(const std::string& name);
 
 /// Generates a query set and its sidecar meta (kind, n, seed, mesh_sha256, mesh path, params,
-/// ordered). Throws InputError for an unknown kind or parameter.
+/// ordered). Throws InputError for an unknown kind, or a parameter unknown or out of its range
+/// (query_kind_params).
 std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,

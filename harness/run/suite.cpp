@@ -14,6 +14,7 @@
 
 #include "harness/core/query_set.hpp"
 #include "harness/core/registry.hpp"
+#include "harness/run/suite_schema.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/sha256.hpp"
 
@@ -51,8 +52,7 @@ std::string QueryPlan::label() const {
 namespace {
 
 [[noreturn]] void yaml_error(const std::string& file, const YAML::Node& node, const std::string& what) {
-  std::string where = node.Mark().line >= 0 ? " (line " + std::to_string(node.Mark().line + 1) + ")" : "";
-  throw file_error(file, what + where);
+  suite_error(file, node, what);
 }
 
 std::vector<YAML::Node> as_list(const YAML::Node& n) {
@@ -76,10 +76,7 @@ std::string scalar(const std::string& file, const YAML::Node& n, const std::stri
 std::vector<std::string> expand_all(const std::string& file, const YAML::Node& n) {
   std::vector<std::string> except;
   if (n.IsMap()) {
-    for (auto kv : n) {
-      const std::string key = kv.first.as<std::string>();
-      if (key != "all" && key != "except") yaml_error(file, n, "unknown key '" + key + "' of {all: true, except: [...]}");
-    }
+    check_suite_keys(file, n, SuiteLevel::all_methods);
     bool all = false;
     try {
       all = n["all"].as<bool>();
@@ -97,6 +94,14 @@ std::vector<std::string> expand_all(const std::string& file, const YAML::Node& n
   return Registry::global().all_method_specs(except);
 }
 
+// The declared options of the method `name`, to tell one given beside `name:` (none when the
+// method is unknown: its name is refused once the spec is resolved).
+const std::vector<ParamSpec>& declared_options(const std::string& name) {
+  static const std::vector<ParamSpec> none;
+  const MethodInfo* m = Registry::global().find(name);
+  return m ? m->params : none;
+}
+
 // Expands {name: m, params: {a: [1, 2], b: x}} into "m:a=1,b=x", "m:a=2,b=x".
 std::vector<std::string> expand_method(const std::string& file, const YAML::Node& n) {
   if (n.IsScalar() && n.as<std::string>() == "all") return expand_all(file, n);
@@ -104,6 +109,7 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
   if (n.IsScalar()) return {n.as<std::string>()};
   if (!n.IsMap() || !n["name"]) yaml_error(file, n, "a method is NAME, NAME:k=v or {name:, params:}");
   std::string name = scalar(file, n["name"], "method name");
+  check_suite_keys(file, n, SuiteLevel::method, declared_options(name));
   std::vector<std::string> specs = {""};
   if (auto ps = n["params"]) {
     if (!ps.IsMap()) yaml_error(file, ps, "method params must be a map");
@@ -134,10 +140,7 @@ QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const f
                           std::map<std::string, std::string>& labels) {
   for (const char* key : {"kind", "n", "seed", "params"})
     if (n[key]) yaml_error(suite, n, std::string("a points file ({file:, name:}) takes no '") + key + "'");
-  for (auto kv : n) {
-    const std::string key = kv.first.as<std::string>();
-    if (key != "file" && key != "name") yaml_error(suite, n, "unknown key '" + key + "' of a points file");
-  }
+  check_suite_keys(suite, n, SuiteLevel::points_file);
   QueryPlan q;
   q.kind = "file";
   q.file = scalar(suite, n["file"], "file");
@@ -152,6 +155,55 @@ QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const f
   return q;
 }
 
+// The query set's `params:`, each checked against the kind's declaration where it stands.
+std::map<std::string, double> query_set_params(const std::string& file, const QueryKind& kind, const YAML::Node& ps) {
+  if (!ps.IsMap()) yaml_error(file, ps, "a query set's params: is a map {name: value}");
+  std::map<std::string, double> out;
+  for (auto kv : ps) {
+    const std::string key = kv.first.as<std::string>();
+    const std::string text = scalar(file, kv.second, "query kind parameter " + key);
+    try {
+      out[key] = query_kind_params(kind, {{key, text}}).get_real(key);
+    } catch (const InputError& e) {
+      yaml_error(file, kv.first, e.what());
+    }
+  }
+  return out;
+}
+
+// A generated query set: a kind alone, or {kind:, n:, seed:, params:}.
+QueryPlan generated_query_plan(const std::string& file, const YAML::Node& n) {
+  QueryPlan q;
+  if (!n.IsScalar() && !n.IsMap())
+    yaml_error(file, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
+  if (n.IsMap() && n["name"]) yaml_error(file, n, "name: is for a points file ({file: PATH, name: NAME})");
+  try {
+    q.kind = n.IsScalar() ? n.as<std::string>() : n["kind"] ? n["kind"].as<std::string>() : q.kind;
+  } catch (const YAML::Exception& e) {
+    yaml_error(file, n, std::string("bad query set: ") + e.what());
+  }
+  if (q.kind == "file") yaml_error(file, n, "a points file is given as {file: PATH}");
+  const QueryKind* kind = find_query_kind(q.kind);
+  if (!kind) {
+    try {
+      query_kind(q.kind);  // the message with the known kinds and the nearest one
+    } catch (const InputError& e) {
+      yaml_error(file, n, e.what());
+    }
+  }
+  if (!n.IsMap()) return q;
+  check_suite_keys(file, n, SuiteLevel::query_set, kind->params);
+  try {
+    if (n["n"]) q.n = n["n"].as<std::size_t>();
+    if (n["seed"]) q.seed = n["seed"].as<std::uint64_t>();
+  } catch (const YAML::Exception& e) {
+    yaml_error(file, n, std::string("bad query set: ") + e.what());
+  }
+  if (n["params"]) q.params = query_set_params(file, *kind, n["params"]);
+  if (q.n == 0) yaml_error(file, n, "n must be > 0");
+  return q;
+}
+
 }  // namespace
 
 SuiteConfig load_suite(const std::string& path) {
@@ -163,13 +215,8 @@ SuiteConfig load_suite(const std::string& path) {
 
 namespace {
 
-/// The suite of the YAML document `root` of the file `path` (load_suite). Throws InputError, or a
-/// YAML::Exception where a value of the wrong shape is read (see parse_suite).
-SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
-  SuiteConfig cfg;
-  cfg.file = path;
-  if (!root.IsMap()) throw file_error(path, "a suite is a YAML map (see suites/README.md)");
-  const fs::path base = fs::path(path).parent_path();
+// The top level's settings (repeat, timeout_s, memory_limit_mb, truth, name) into `cfg`.
+void read_settings(const YAML::Node& root, const std::string& path, SuiteConfig& cfg) {
   try {
     cfg.name = root["name"] ? root["name"].as<std::string>() : fs::path(path).stem().string();
     if (root["repeat"]) cfg.repeat = root["repeat"].as<int>();
@@ -184,117 +231,147 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
   // The child's address-space limit is set from it (0: none).
   if (!(cfg.memory_limit_mb >= 0 && std::isfinite(cfg.memory_limit_mb)))
     throw file_error(path, "memory_limit_mb must be a number of MiB >= 0 (0 = no limit)");
+}
+
+std::vector<MeshPlan> read_meshes(const std::string& path, const YAML::Node& list, const fs::path& base) {
+  std::vector<MeshPlan> meshes;
+  for (auto n : as_list(list)) {
+    MeshPlan mp;
+    if (n.IsScalar()) {
+      mp.path = n.as<std::string>();
+    } else if (n.IsMap() && n["path"]) {
+      check_suite_keys(path, n, SuiteLevel::mesh);
+      mp.path = n["path"].as<std::string>();
+      if (n["name"]) mp.name = n["name"].as<std::string>();
+    } else {
+      yaml_error(path, n, "a mesh is a path or {path:, name:}");
+    }
+    if (fs::path(mp.path).is_relative()) mp.path = (base / mp.path).lexically_normal().string();
+    if (mp.name.empty()) mp.name = fs::path(mp.path).stem().string();
+    meshes.push_back(mp);
+  }
+  return meshes;
+}
+
+std::vector<QueryType> read_query_types(const std::string& path, const YAML::Node& m) {
+  std::vector<QueryType> types;
+  for (auto n : as_list(m["query"] ? m["query"] : YAML::Node(std::vector<std::string>{"inside", "distance"}))) {
+    try {
+      types.push_back(parse_query_type(n.as<std::string>()));
+    } catch (const InputError& e) {
+      yaml_error(path, n, e.what());
+    }
+  }
+  return types;
+}
+
+std::vector<MethodSpec> read_methods(const std::string& path, const YAML::Node& list) {
+  std::vector<MethodSpec> methods;
+  for (auto n : as_list(list))
+    for (auto& s : expand_method(path, n)) {
+      // Parsed and resolved once, now: a typo in a suite is bad input, not 40 failed jobs. A
+      // method this build left out (a Python method whose package is not installed) is no typo:
+      // its jobs stay in the suite, unresolved, and become `unsupported` rows with the reason.
+      MethodSpec spec = Registry::global().describe(s);
+      if (!spec.resolved() && !Registry::global().is_left_out(spec.name)) yaml_error(path, n, spec.problem);
+      methods.push_back(std::move(spec));
+      if (methods.size() > kMaxSuiteJobs)
+        yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
+    }
+  return methods;
+}
+
+// The thread axis: query threads per job (default 1), each count once.
+std::vector<int> read_thread_counts(const std::string& path, const YAML::Node& m) {
+  std::vector<int> thread_counts;
+  for (auto n : as_list(m["threads"] ? m["threads"] : YAML::Node(1))) {
+    int t = 0;
+    try {
+      t = n.as<int>();
+    } catch (const YAML::Exception&) {
+      yaml_error(path, n, "threads: is a thread count or a list of them");
+    }
+    if (t < 1 || t > kMaxJobThreads)
+      yaml_error(path, n, "threads must be between 1 and " + std::to_string(kMaxJobThreads));
+    if (std::find(thread_counts.begin(), thread_counts.end(), t) == thread_counts.end()) thread_counts.push_back(t);
+  }
+  if (thread_counts.empty()) yaml_error(path, m, "threads: is an empty list");
+  return thread_counts;
+}
+
+/// One matrix's axes, read and checked.
+struct MatrixAxes {
+  std::vector<MeshPlan> meshes;
+  std::vector<QueryPlan> queries;
+  std::vector<QueryType> types;
+  std::vector<MethodSpec> methods;
+  std::vector<int> threads;
+  double jobs() const {  // in floating point: the product may not fit in 64 bits
+    return double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size()) *
+           double(threads.size());
+  }
+};
+
+MatrixAxes read_matrix(const std::string& path, const YAML::Node& m, const fs::path& base,
+                       std::map<std::string, std::string>& query_files) {
+  if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
+  check_suite_keys(path, m, SuiteLevel::matrix);
+  for (const char* key : {"meshes", "queries", "methods"})
+    if (!m[key]) yaml_error(path, m, std::string("matrix without '") + key + "'");
+  MatrixAxes axes;
+  axes.meshes = read_meshes(path, m["meshes"], base);
+  for (auto n : as_list(m["queries"]))
+    axes.queries.push_back(n.IsMap() && n["file"] ? file_query_plan(path, n, base, query_files)
+                                                  : generated_query_plan(path, n));
+  axes.types = read_query_types(path, m);
+  axes.methods = read_methods(path, m["methods"]);
+  axes.threads = read_thread_counts(path, m);
+  return axes;
+}
+
+// "<mesh>__<query set>__<query>__<method spec>[__t<T>]", file-safe, at most 200 characters.
+std::string job_id(const MeshPlan& mesh, const QueryPlan& q, QueryType t, const MethodSpec& spec, int threads) {
+  // One thread keeps the id it always had; more add "__t<T>".
+  std::string id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec.text +
+                             (threads == 1 ? std::string() : "__t" + std::to_string(threads)));
+  if (id.size() > 200) id = id.substr(0, 180) + "-" + sha256_hex(id.data(), id.size()).substr(0, 12);
+  return id;
+}
+
+// The matrix's jobs, in axis order, each id once over the suite (`seen`).
+void add_jobs(const MatrixAxes& axes, std::set<std::string>& seen, std::vector<JobPlan>& jobs) {
+  for (auto& mesh : axes.meshes)
+    for (auto& q : axes.queries)
+      for (auto t : axes.types)
+        for (auto& spec : axes.methods)
+          for (int threads : axes.threads) {
+            JobPlan j{job_id(mesh, q, t, spec, threads), mesh, q, t, spec, threads};
+            if (seen.insert(j.id).second) jobs.push_back(j);
+          }
+}
+
+/// The suite of the YAML document `root` of the file `path` (load_suite). Throws InputError, or a
+/// YAML::Exception where a value of the wrong shape is read (see parse_suite).
+SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
+  SuiteConfig cfg;
+  cfg.file = path;
+  if (!root.IsMap()) throw file_error(path, "a suite is a YAML map (see suites/README.md)");
+  check_suite_keys(path, root, SuiteLevel::top);
+  read_settings(root, path, cfg);
   auto matrices = root["matrices"];
   if (!matrices || !matrices.IsSequence() || matrices.size() == 0)
     throw file_error(path, "missing 'matrices:' (a list of {meshes, queries, query, methods})");
-
+  const fs::path base = fs::path(path).parent_path();
   std::set<std::string> seen;
   std::map<std::string, std::string> query_files;  // label -> file, across matrices
   double expanded = 0;                              // jobs of the matrices so far, duplicates included
   for (auto m : matrices) {
-    if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
-    for (const char* key : {"meshes", "queries", "methods"})
-      if (!m[key]) yaml_error(path, m, std::string("matrix without '") + key + "'");
-    std::vector<MeshPlan> meshes;
-    for (auto n : as_list(m["meshes"])) {
-      MeshPlan mp;
-      if (n.IsScalar()) {
-        mp.path = n.as<std::string>();
-      } else if (n.IsMap() && n["path"]) {
-        mp.path = n["path"].as<std::string>();
-        if (n["name"]) mp.name = n["name"].as<std::string>();
-      } else {
-        yaml_error(path, n, "a mesh is a path or {path:, name:}");
-      }
-      if (fs::path(mp.path).is_relative()) mp.path = (base / mp.path).lexically_normal().string();
-      if (mp.name.empty()) mp.name = fs::path(mp.path).stem().string();
-      meshes.push_back(mp);
-    }
-    std::vector<QueryPlan> queries;
-    for (auto n : as_list(m["queries"])) {
-      QueryPlan q;
-      if (n.IsMap() && n["file"]) {
-        queries.push_back(file_query_plan(path, n, base, query_files));
-        continue;
-      }
-      try {
-        if (n.IsScalar()) {
-          q.kind = n.as<std::string>();
-        } else if (n.IsMap()) {
-          if (n["name"]) yaml_error(path, n, "name: is for a points file ({file: PATH, name: NAME})");
-          if (n["kind"]) q.kind = n["kind"].as<std::string>();
-          if (n["n"]) q.n = n["n"].as<std::size_t>();
-          if (n["seed"]) q.seed = n["seed"].as<std::uint64_t>();
-          if (n["params"])
-            for (auto kv : n["params"]) q.params[kv.first.as<std::string>()] = kv.second.as<double>();
-        } else {
-          yaml_error(path, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
-        }
-      } catch (const YAML::Exception& e) {
-        yaml_error(path, n, std::string("bad query set: ") + e.what());
-      }
-      if (q.kind == "file") yaml_error(path, n, "a points file is given as {file: PATH}");
-      if (!find_query_kind(q.kind)) yaml_error(path, n, "unknown query kind '" + q.kind + "'");
-      if (q.n == 0) yaml_error(path, n, "n must be > 0");
-      queries.push_back(q);
-    }
-    std::vector<QueryType> types;
-    for (auto n : as_list(m["query"] ? m["query"] : YAML::Node(std::vector<std::string>{"inside", "distance"}))) {
-      try {
-        types.push_back(parse_query_type(n.as<std::string>()));
-      } catch (const InputError& e) {
-        yaml_error(path, n, e.what());
-      }
-    }
-    std::vector<MethodSpec> methods;
-    for (auto n : as_list(m["methods"]))
-      for (auto& s : expand_method(path, n)) {
-        // Parsed and resolved once, now: a typo in a suite is bad input, not 40 failed jobs. A
-        // method this build left out (a Python method whose package is not installed) is no typo:
-        // its jobs stay in the suite, unresolved, and become `unsupported` rows with the reason.
-        MethodSpec spec = Registry::global().describe(s);
-        if (!spec.resolved() && !Registry::global().is_left_out(spec.name)) yaml_error(path, n, spec.problem);
-        methods.push_back(std::move(spec));
-        if (methods.size() > kMaxSuiteJobs)
-          yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
-      }
-    // The thread axis: query threads per job (default 1).
-    std::vector<int> thread_counts;
-    for (auto n : as_list(m["threads"] ? m["threads"] : YAML::Node(1))) {
-      int t = 0;
-      try {
-        t = n.as<int>();
-      } catch (const YAML::Exception&) {
-        yaml_error(path, n, "threads: is a thread count or a list of them");
-      }
-      if (t < 1 || t > kMaxJobThreads)
-        yaml_error(path, n, "threads must be between 1 and " + std::to_string(kMaxJobThreads));
-      if (std::find(thread_counts.begin(), thread_counts.end(), t) == thread_counts.end()) thread_counts.push_back(t);
-    }
-    if (thread_counts.empty()) yaml_error(path, m, "threads: is an empty list");
-    // Before the product is made: its size, in floating point since it may not fit in 64 bits.
-    expanded += double(meshes.size()) * double(queries.size()) * double(types.size()) * double(methods.size()) *
-                double(thread_counts.size());
+    const MatrixAxes axes = read_matrix(path, m, base, query_files);
+    expanded += axes.jobs();  // before the product is made
     if (expanded > double(kMaxSuiteJobs))
       yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
                               " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
-    for (auto& mesh : meshes)
-      for (auto& q : queries)
-        for (auto t : types)
-          for (auto& spec : methods)
-            for (int threads : thread_counts) {
-              JobPlan j;
-              j.mesh = mesh;
-              j.queries = q;
-              j.query = t;
-              j.method = spec;
-              j.threads = threads;
-              // One thread keeps the id it always had; more add "__t<T>".
-              j.id = file_safe(mesh.name + "__" + q.label() + "__" + to_string(t) + "__" + spec.text +
-                               (threads == 1 ? std::string() : "__t" + std::to_string(threads)));
-              if (j.id.size() > 200) j.id = j.id.substr(0, 180) + "-" + sha256_hex(j.id.data(), j.id.size()).substr(0, 12);
-              if (seen.insert(j.id).second) cfg.jobs.push_back(j);
-            }
+    add_jobs(axes, seen, cfg.jobs);
   }
   return cfg;
 }

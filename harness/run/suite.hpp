@@ -24,6 +24,9 @@ struct QueryPlan {
   std::string name;  ///< a points file's short name in job ids (default: its stem)
   /// "random-n10000-s1[-<hash of params>]"; "file-<name>" for a points file.
   std::string label() const;
+  /// What `bvhbench queries` is given to make the set, after --mesh and before --out:
+  /// --kind K --n N --seed S [--param=k=v ...]. Empty for a points file.
+  std::vector<std::string> generator_args() const;
 };
 
 struct MeshPlan {
@@ -65,7 +68,14 @@ std::string file_safe(const std::string& s);
 /// A query-set parameter value as labels and the `queries --param` command line write it.
 std::string format_number(double v);
 
-/// Parses and expands a suite file. Throws InputError naming the file and the problem.
+/// The jobs `jobs` of the suite `cfg` as JSON, without running anything: the suite's settings
+/// and, per job, its id, mesh, query set (how it is made), query type, method (spec, name,
+/// canonical key, every option's value), threads and repetitions. What `bvhbench suite FILE
+/// --list --json` prints, and what every tool that needs a suite's jobs reads (suites/README.md).
+nlohmann::json suite_jobs_json(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs);
+
+/// Parses and expands a suite file, every map checked against the suite grammar first
+/// (suite_schema.hpp). Throws InputError naming the file, the line and the problem.
 SuiteConfig load_suite(const std::string& path);
 /// The same for the suite text `yaml` of the file `path` (which names it in messages; relative
 /// paths in it are resolved against its folder). Reads no file.

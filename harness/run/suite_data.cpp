@@ -50,10 +50,9 @@ QuerySetFile SuiteData::queries(const JobPlan& j) {
     }
   }
   if (!fresh) {
-    std::vector<std::string> args = {exe_, "--quiet", "queries", "--mesh", j.mesh.path, "--kind", j.queries.kind,
-                                     "--n", std::to_string(j.queries.n), "--seed", std::to_string(j.queries.seed),
-                                     "--out", npy};
-    for (auto& [k, v] : j.queries.params) args.push_back("--param=" + k + "=" + format_number(v));
+    std::vector<std::string> args = {exe_, "--quiet", "queries", "--mesh", j.mesh.path};
+    for (const std::string& a : j.queries.generator_args()) args.push_back(a);
+    args.insert(args.end(), {"--out", npy});
     std::cerr << "suite: making query set " << fs::path(npy).filename().string() << "\n";
     auto r = run_child(args, limits_, (fs::path(logs_) / ("queries__" + file_safe(j.mesh.name) + "__" + j.queries.label() + ".log")).string());
     if (!(r.exited && r.exit_code == 0)) {

@@ -1,7 +1,8 @@
 #pragma once
-/// Numbers in text files (ASCII meshes, text files of points): parsed with std::from_chars,
-/// which is exact (correctly rounded, so a value printed with 17 significant digits reads back
-/// bit-identical) and independent of the locale.
+/// Numbers in text (ASCII meshes, text files of points, the parameters of methods and query
+/// kinds): the one parser of each, with std::from_chars, which is exact (correctly rounded, so a
+/// value printed with 17 significant digits reads back bit-identical) and independent of the
+/// locale.
 #include <charconv>
 #include <cstdlib>
 #include <string>
@@ -27,6 +28,16 @@ inline bool parse_double(std::string_view tok, double& out) {
     return true;
   }
   return r.ec == std::errc();
+}
+
+/// Parses all of `tok` as a (signed) integer; false for anything else, or out of range.
+inline bool parse_int(std::string_view tok, long long& out) {
+  const char* b = tok.data();
+  const char* end = b + tok.size();
+  if (b != end && *b == '+') ++b;
+  if (b == end || *b == '+') return false;
+  auto r = std::from_chars(b, end, out);
+  return r.ec == std::errc() && r.ptr == end;
 }
 
 }  // namespace bvhbench

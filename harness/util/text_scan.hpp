@@ -1,7 +1,8 @@
 #pragma once
 /// Tokens and numbers of the text mesh formats (ASCII PLY, OBJ, ASCII STL, OFF), parsed with
 /// from_chars: exact, locale-independent, and strict (a token is a number only if all of it is).
-/// parse_double is text_number.hpp's, shared with the text files of points.
+/// parse_double and parse_int are text_number.hpp's, shared with the text files of points and
+/// the parameters of methods and query kinds.
 #include <charconv>
 #include <string_view>
 #include <system_error>
@@ -32,16 +33,6 @@ inline std::string_view strip(std::string_view s) {
 
 /// `s` up to its first '#' (a comment to the end of the line in OBJ and OFF).
 inline std::string_view before_comment(std::string_view s) { return s.substr(0, s.find('#')); }
-
-/// Parses all of `tok` as a (signed) integer.
-inline bool parse_int(std::string_view tok, long long& out) {
-  const char* b = tok.data();
-  const char* end = b + tok.size();
-  if (b != end && *b == '+') ++b;
-  if (b == end || *b == '+') return false;
-  auto r = std::from_chars(b, end, out);
-  return r.ec == std::errc() && r.ptr == end;
-}
 
 /// True if `s` holds a byte that no text mesh file has (a control character other than tab,
 /// CR, LF, FF, VT): binary data.

@@ -43,8 +43,8 @@ def baseline(bvhbench, shared_meshes, tmp_path_factory):
     return d
 
 
-def test_the_job_list_has_one_job_per_method_and_query_type():
-    jobs = instr_gate.load_jobs(ROOT / "suites" / "ci_instructions.yml")
+def test_the_job_list_has_one_job_per_method_and_query_type(bvhbench):
+    jobs = instr_gate.load_jobs(ROOT / "suites" / "ci_instructions.yml", bvhbench)
     pairs = {(j["method"], j["query"]) for j in jobs}
     assert len(pairs) == len(jobs)
     for m in ("cgal_aabb", "embree", "openvdb", "ebp_octree", "brute_force",

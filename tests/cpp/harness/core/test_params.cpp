@@ -44,6 +44,31 @@ TEST(Params, Rejections) {
   EXPECT_NE(bad({{"mode", "c"}}).find("not one of"), std::string::npos);
 }
 
+// An unknown key names the declared one it probably was; a range may exclude its minimum (a
+// length, a speed: > 0), and the message says which bound was crossed. Query kinds declare their
+// parameters the same way (query_set.hpp), and resolve_for names them as their owner.
+TEST(Params, SuggestionsAndExcludedMinimum) {
+  auto message = [](const std::string& owner, const std::vector<ParamSpec>& specs,
+                    std::map<std::string, std::string> g) {
+    try {
+      Params::resolve_for(owner, specs, g);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message("method m", kSpecs, {{"mdoe", "a"}}),
+            "method m: unknown parameter 'mdoe' (did you mean 'mode'? known: n, x, on, mode, name, odd)");
+  EXPECT_EQ(message("method m", kSpecs, {{"zzzzzz", "1"}}).find("did you mean"), std::string::npos);
+  ParamSpec speed{"speed", ParamType::real, ParamRole::query, "0.1", "m/s", {}};
+  speed.min = 0;
+  speed.min_excluded = true;
+  EXPECT_EQ(message("query kind 'k'", {speed}, {{"speed", "0"}}), "query kind 'k': parameter speed=0: must be > 0");
+  EXPECT_EQ(message("query kind 'k'", {speed}, {{"speed", "-1"}}), "query kind 'k': parameter speed=-1: must be > 0");
+  EXPECT_DOUBLE_EQ(Params::resolve_for("query kind 'k'", {speed}, {{"speed", "1e-9"}}).get_real("speed"), 1e-9);
+  EXPECT_EQ(message("method m", kSpecs, {{"x", "2"}}), "method m: parameter x=2: out of range [0, 1]");
+}
+
 // One configuration, one key: the key is printed from the typed value, not the text given.
 TEST(Params, CanonicalKeyFromTypedValues) {
   EXPECT_EQ(Params::resolve("m", kSpecs, {{"x", "0.25"}}).non_default_string(), "x=0.25");

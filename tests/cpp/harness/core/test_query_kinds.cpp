@@ -24,7 +24,7 @@
 using namespace bvhbench;
 using namespace bvhbench::test;
 namespace qd = bvhbench::query_kinds_detail;
-using KindParams = qd::Params;
+using KindParams = std::map<std::string, double>;  // given values, by name
 
 namespace {
 
@@ -85,7 +85,10 @@ TEST(QueryKinds, EveryKindIsDeterministicAndRecordsItsParameters) {
     EXPECT_EQ(meta1, meta2) << k.name;
     EXPECT_EQ(meta1["kind"], k.name);
     EXPECT_EQ(meta1["seed"], 7);
-    for (auto& [key, v] : k.defaults) EXPECT_EQ(meta1["params"][key], v) << k.name << " " << key;
+    const Params defaults = query_kind_params(k, KindParams{});
+    ASSERT_EQ(meta1["params"].size(), k.params.size()) << k.name;
+    for (const ParamSpec& p : k.params)
+      EXPECT_EQ(meta1["params"][p.name], defaults.get_real(p.name)) << k.name << " " << p.name;
     for (const Vec3d& p : a) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
   }
 }
@@ -170,7 +173,7 @@ TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
 TEST(QueryKinds, HapticHasNoJumpsInsideEpisodesAndStaysInTheContactBand) {
   const Mesh m = octasphere(4);  // 2048 triangles, diagonal 2 sqrt(3) = "30 cm"
   const QueryKind* k = find_query_kind("haptic");
-  const qd::HapticLayout L = qd::haptic_layout(m, k->defaults);
+  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(*k, KindParams{}));
   ASSERT_EQ(L.approach, 150u);  // 1.5 * 20 mm / 0.2 m/s at 1 kHz
   ASSERT_EQ(L.contact, 2000u);
   const std::size_t n = 2 * L.total() + 1000;  // two whole episodes and a cut one
@@ -213,10 +216,7 @@ TEST(QueryKinds, ContactIsTheHapticPathsContactPhasesAlone) {
   // very samples the `haptic` kind spends in the band.
   const Mesh m = octasphere(3);
   const KindParams band = {{"band_mm", 0.2}, {"slide_speed", 0.3}, {"contact_ms", 300}};
-  KindParams hp = band;
-  const QueryKind* h = find_query_kind("haptic");
-  for (auto& [k, v] : h->defaults) hp.emplace(k, v);
-  const qd::HapticLayout L = qd::haptic_layout(m, hp);
+  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("haptic"), band));
   const std::size_t episodes = 3;
   auto haptic = generate_queries(m, "haptic", episodes * L.total(), 11, band, nullptr);
   auto contact = generate_queries(m, "contact", episodes * L.contact, 11, band, nullptr);
@@ -231,9 +231,7 @@ TEST(QueryKinds, ContactStaysInItsBandAtEveryBandAndSpeed) {
   for (double band_mm : {0.05, 0.2, 0.5})
     for (double speed : {0.05, 0.3}) {
       const KindParams given = {{"band_mm", band_mm}, {"slide_speed", speed}, {"contact_ms", 500}};
-      KindParams all = given;
-      for (auto& [k, v] : find_query_kind("contact")->defaults) all.emplace(k, v);
-      const qd::HapticLayout L = qd::haptic_layout(m, all, false);
+      const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("contact"), given), false);
       ASSERT_EQ(L.approach, 0u);
       ASSERT_EQ(L.leave, 0u);
       ASSERT_EQ(L.contact, 500u);
@@ -278,7 +276,7 @@ TEST(QueryKinds, HapticFollowsTheSurfaceOfANonConvexModel) {
   // Skipped only when the file is absent: a bunny that is there but fails to load is a failure.
   if (!std::filesystem::exists(bunny)) GTEST_SKIP() << "no shared bunny: " << bunny;
   const Mesh m = load_mesh(bunny);
-  const qd::HapticLayout L = qd::haptic_layout(m, find_query_kind("haptic")->defaults);
+  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("haptic"), KindParams{}));
   const std::size_t n = L.total();
   auto pts = generate_queries(m, "haptic", n, 9, {}, nullptr);
   double largest_step = 0;
