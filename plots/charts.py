@@ -20,6 +20,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLoca
 import fmt
 import headline
 import metrics
+import registry
 import stability
 import sweeps
 import tables
@@ -35,12 +36,9 @@ class NoData(Exception):
 
 Chart = namedtuple("Chart", "func title caption")
 
-KIND_ORDER = ["random", "near", "haptic", "contact"]
 MAX_PANELS = 9
 
-
-def _kind_key(k):
-    return (KIND_ORDER.index(k) if k in KIND_ORDER else len(KIND_ORDER), k)
+_kind_key = registry.kind_sort_key  # panels in the order the runner registers its query kinds
 
 
 def _grid(n, max_cols=3, panel=FIGSIZE_PANEL, legend_width=2.3):

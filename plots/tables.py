@@ -154,6 +154,9 @@ def _status_note(jobs, query, kind):
     return "/".join(st) if st else None
 
 
+# The paper's measures, each a query on a query kind (its published figures, PAPER_REFERENCE):
+# named here because they are the paper's, not a listing of the kinds (that is the runner's,
+# registry.query_kinds()).
 RATE_COLUMNS = [("pis_random", "inside", "random"), ("pis_haptic", "inside", "haptic"),
                 ("dist_haptic", "distance", "haptic"), ("dist_contact", "distance", "contact")]
 
@@ -190,10 +193,7 @@ def paper_rows(rs):
                 "build_s": median(j.build_seconds for j in ok),
                 "structure_bytes": median(j.structure_bytes for j in ok),
                 "file_bytes": median(j.file_bytes for j in ok),
-                "pis_random": _pick(js, "inside", "random"),
-                "pis_haptic": _pick(js, "inside", "haptic"),
-                "dist_haptic": _pick(js, "distance", "haptic"),
-                "dist_contact": _pick(js, "distance", "contact"),
+                **{k: _pick(js, q, kd) for k, q, kd in RATE_COLUMNS},
                 "notes": {k: _status_note(js, q, kd) for k, q, kd in RATE_COLUMNS},
                 "wrong": {k: _inaccurate(js, q, kd) for k, q, kd in RATE_COLUMNS},
             }

@@ -28,6 +28,9 @@ import statistics
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "plots"))
+import results_io  # noqa: E402  (every reader of results goes through it)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -76,38 +79,40 @@ def detect_steps(values, min_noise=0.002, penalty_factor=4.0):
 
 # ---- appending ----------------------------------------------------------------------------------
 
-def machine_key(result):
-    ctx = result.get("context", {})
-    fp = (result.get("machine_dependent") or {}).get("fingerprint") or {}
-    key = {"cpu": fp.get("cpu"), "isa": fp.get("isa"), "libraries": ctx.get("libraries"),
-           "compiler": ctx.get("compiler"), "cxx_flags": (ctx.get("cxx_flags") or "").strip(),
-           "build_type": ctx.get("build_type"), "host": ctx.get("host")}
+def machine_key(job):
+    """The machine and build a result was measured on (results_io.Job), and its short key."""
+    fp = job.get("machine_dependent.fingerprint") or {}
+    key = {"cpu": fp.get("cpu"), "isa": fp.get("isa"), "libraries": job.get("context.libraries"),
+           "compiler": job.get("context.compiler"), "cxx_flags": (job.get("context.cxx_flags") or "").strip(),
+           "build_type": job.get("context.build_type"), "host": job.get("context.host")}
     return key, hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
 
 def append_suite(results_dir, history):
-    runs = sorted(Path(results_dir, "runs").glob("*.json"))
-    if not runs:
-        print(f"bench_history: no results in {results_dir}/runs", file=sys.stderr)
+    """Each ok job's rate of a suite's results (read through plots/results_io.py) appended to
+    HISTORY/<machine key>/rates.jsonl."""
+    try:
+        rs = results_io.load(str(results_dir))
+    except results_io.ReportError as e:
+        print(f"bench_history: {e}", file=sys.stderr)
+        return 2
+    if rs.unreadable:
+        print(f"bench_history: {results_dir}/runs/{rs.unreadable[0][0]}: unreadable: {rs.unreadable[0][1]}",
+              file=sys.stderr)
         return 2
     n = 0
-    for f in runs:
-        try:
-            r = json.loads(f.read_text())
-        except ValueError as e:
-            print(f"bench_history: {f}: not JSON: {e}", file=sys.stderr)
-            return 2
-        if r.get("status") != "ok" or not (r.get("queries") or {}).get("throughput_qps", {}).get("median"):
+    for job in sorted(rs.jobs, key=lambda j: j.path):
+        qps = job.num("queries.throughput_qps.median")
+        if not job.ok or not qps:
             continue
-        key, k = machine_key(r)
+        key, k = machine_key(job)
         d = Path(history) / k
         d.mkdir(parents=True, exist_ok=True)
         (d / "fingerprint.json").write_text(json.dumps(key, indent=1, sort_keys=True) + "\n")
-        q = r["queries"]["throughput_qps"]
-        cal = (r.get("calibration") or {}).get("median_seconds")
-        line = {"commit": r["context"].get("git_commit"), "dirty": r["context"].get("git_dirty"),
-                "date": r["context"].get("date"), "job": r["job"]["id"], "qps_median": q["median"],
-                "qps_normalised": q["median"] * cal if cal else None}
+        cal = job.num("calibration.median_seconds")
+        line = {"commit": job.get("context.git_commit"), "dirty": job.get("context.git_dirty"),
+                "date": job.get("context.date"), "job": job.get("job.id"), "qps_median": qps,
+                "qps_normalised": qps * cal if cal else None}
         with open(d / "rates.jsonl", "a") as out:
             out.write(json.dumps(line, sort_keys=True) + "\n")
         n += 1

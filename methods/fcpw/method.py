@@ -47,7 +47,7 @@ SWEEP = ["batch=true"]
 
 
 class Method:
-    def __init__(self, aggregate="bvh_surface_area", vectorize=True, rescale=True):
+    def __init__(self, *, aggregate, vectorize, rescale):
         self.aggregate = aggregate
         self.vectorize = vectorize
         self.rescale = rescale

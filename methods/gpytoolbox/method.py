@@ -30,7 +30,7 @@ SWEEP = ["batch=true"]
 
 
 class Method:
-    def __init__(self, order=2, accuracy_scale=2.0):
+    def __init__(self, *, order, accuracy_scale):
         self.order = order
         self.accuracy_scale = accuracy_scale
 

@@ -39,7 +39,7 @@ AABB_NODE_BYTES = 72
 
 
 class Method:
-    def __init__(self, sign_type="winding_number", accuracy_scale=2.0, order=2):
+    def __init__(self, *, sign_type, accuracy_scale, order):
         self.sign_type = sign_type
         self.accuracy_scale = accuracy_scale
         self.order = order

@@ -42,7 +42,7 @@ SWEEP = ["batch=true"]
 
 
 class Method:
-    def __init__(self, nsamples="1"):
+    def __init__(self, *, nsamples):
         if IMPORT_ERROR is not None:
             raise NotImplementedError(f"open3d cannot be imported in this process ({IMPORT_ERROR})")
         self.nsamples = int(nsamples)

@@ -50,7 +50,7 @@ SWEEP = ["batch=true"]
 
 
 class Method:
-    def __init__(self, ray="embree", rescale=True):
+    def __init__(self, *, ray, rescale):
         self.ray_backend = ray
         self.rescale = rescale
         if ray == "embree" and not HAS_EMBREEX:

@@ -145,8 +145,7 @@ def _inside_parity(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), direction: 
 
 
 class Method:
-    def __init__(self, device="cpu", sign="parity", n_sample=1, accuracy=2.0, bvh_constructor="sah",
-                 bvh_leaf_size=0):
+    def __init__(self, *, device, sign, n_sample, accuracy, bvh_constructor, bvh_leaf_size):
         wp.init()
         if device == "cuda" and not wp.is_cuda_available():
             raise NotImplementedError("device=cuda: Warp finds no CUDA device on this machine "

@@ -13,7 +13,12 @@ sys.path.insert(0, str(ROOT / "datasets-scripts"))
 from bvhdata.families import Context, FAMILIES  # noqa: E402
 from bvhdata.ply import write_ply  # noqa: E402
 
-KINDS = ["random", "near", "haptic", "contact", "surface"]
+sys.path.insert(0, str(ROOT / "plots"))
+import registry  # noqa: E402
+
+# Every kind the runner registers, with its parameters (`bvhbench kinds --json`; none without a
+# runner, and then the tests below are skipped).
+KINDS = registry.query_kinds()
 
 
 @pytest.fixture(scope="module")
@@ -34,9 +39,10 @@ def make(exe, mesh, kind, out, n=3000, seed=1, *params):
         return pts, json.load(f)
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_kind_writes_points_and_sidecar_deterministically(bvhbench, torus_ply, tmp_path, kind):
+@pytest.mark.parametrize("spec", KINDS, ids=[k["name"] for k in KINDS])
+def test_kind_writes_points_and_sidecar_deterministically(bvhbench, torus_ply, tmp_path, spec):
     mesh, _ = torus_ply
+    kind = spec["name"]
     a, meta = make(bvhbench, mesh, kind, tmp_path / "a.npy", 3000, 5)
     b, _ = make(bvhbench, mesh, kind, tmp_path / "b.npy", 3000, 5)
     c, _ = make(bvhbench, mesh, kind, tmp_path / "c.npy", 3000, 6)
@@ -45,7 +51,9 @@ def test_kind_writes_points_and_sidecar_deterministically(bvhbench, torus_ply, t
     assert not np.array_equal(a, c)
     assert meta["kind"] == kind and meta["n"] == 3000 and meta["seed"] == 5
     assert meta["mesh_sha256"] and isinstance(meta["params"], dict) and meta["params"]
-    assert meta["ordered"] == (kind in ("haptic", "contact"))
+    assert meta["ordered"] == spec["ordered"]
+    # The sidecar records every declared parameter, at the default the listing gives.
+    assert meta["params"] == {p["name"]: float(p["default"]) for p in spec["params"]}
 
 
 def test_random_in_enlarged_box(bvhbench, torus_ply, tmp_path):
