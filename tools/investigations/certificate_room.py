@@ -182,7 +182,7 @@ def dist_stats(x: np.ndarray) -> dict:
             "max": float(x.max())}
 
 
-def main(argv=None) -> int:
+def parse_args(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--mesh", required=True)
     ap.add_argument("--queries", required=True, help="Q.npy of `bvhbench queries`")
@@ -199,28 +199,34 @@ def main(argv=None) -> int:
                     help="|S| is computed at up to this many certificates per rule (evenly spaced)")
     ap.add_argument("--only", default=None, help="only the rules whose label matches this regex")
     ap.add_argument("--json", default=None)
-    a = ap.parse_args(argv)
+    return ap.parse_args(argv)
 
-    name = a.name or a.mesh.rsplit("/", 1)[-1]
-    V, F = read_mesh(a.mesh)
-    Q = np.load(a.queries).astype(np.float64)
-    T = np.load(a.truth)
-    best = np.abs(T["distance"].astype(np.float64))
-    if len(best) != len(Q):
-        raise SystemExit("truth and queries differ in length")
-    diag = float(np.linalg.norm(V.max(0) - V.min(0)))
-    steps = np.sqrt(((Q[1:] - Q[:-1]) ** 2).sum(1))
-    med = float(np.median(steps))
-    jumps = steps > 20 * med
-    step = float(steps[~jumps].mean())  # the path's mean step, jumps between episodes left out
-    idx = TriangleIndex(V, F)
-    edge = float(np.mean(np.sqrt(((V[F[:, 1]] - V[F[:, 0]]) ** 2).sum(1))))
 
-    # local step (for the speed-adaptive rule): mean of the last 8 steps before i (jumps out)
-    st = np.concatenate([[step], np.where(jumps, step, steps)])
-    cs = np.cumsum(np.concatenate([[0.0], st]))
-    loc = np.array([(cs[i + 1] - cs[max(0, i - 7)]) / (i + 1 - max(0, i - 7)) for i in range(len(Q))])
+class HapticPath:
+    """The haptic path and its answers: points Q, exact distances best, the steps between them."""
 
+    def __init__(self, a):
+        self.V, self.F = read_mesh(a.mesh)
+        self.Q = np.load(a.queries).astype(np.float64)
+        self.best = np.abs(np.load(a.truth)["distance"].astype(np.float64))
+        if len(self.best) != len(self.Q):
+            raise SystemExit("truth and queries differ in length")
+        self.diag = float(np.linalg.norm(self.V.max(0) - self.V.min(0)))
+        self.steps = np.sqrt(((self.Q[1:] - self.Q[:-1]) ** 2).sum(1))
+        self.med = float(np.median(self.steps))
+        self.jumps = self.steps > 20 * self.med
+        self.step = float(self.steps[~self.jumps].mean())  # the path's mean step, jumps between episodes left out
+        self.idx = TriangleIndex(self.V, self.F)
+        self.edge = float(np.mean(np.sqrt(((self.V[self.F[:, 1]] - self.V[self.F[:, 0]]) ** 2).sum(1))))
+        # local step (for the speed-adaptive rule): mean of the last 8 steps before i (jumps out)
+        st = np.concatenate([[self.step], np.where(self.jumps, self.step, self.steps)])
+        cs = np.cumsum(np.concatenate([[0.0], st]))
+        self.loc = np.array([(cs[i + 1] - cs[max(0, i - 7)]) / (i + 1 - max(0, i - 7)) for i in range(len(self.Q))])
+
+
+def radius_rules(P):
+    """[(label, kind, r(i))]: the certificate radius rules compared."""
+    step, best, loc = P.step, P.best, P.loc
     rules = []
     for k in (0.5, 1, 2, 4, 8, 16, 32):
         rules.append((f"{k:g} x step", "step", lambda i, k=k: k * step))
@@ -240,9 +246,9 @@ def main(argv=None) -> int:
         if d is None:
             R = best[i] * (1 + 1e-9) + 4 * step
             while True:
-                d = idx.distances_within(Q[i], R)
+                d = P.idx.distances_within(P.Q[i], R)
                 d = d[d <= R]
-                if len(d) >= KMAX + 1 or len(d) == len(F):
+                if len(d) >= KMAX + 1 or len(d) == len(P.F):
                     break
                 R *= 2
             knn_cache[i] = d
@@ -254,61 +260,54 @@ def main(argv=None) -> int:
     # capped: k steps, but never more than the K nearest triangles
     for k, K in ((4, 64), (8, 32), (8, 64), (8, 128), (16, 32), (16, 64), (16, 128), (16, 256)):
         rules.append((f"min({k} x step, r of {K} nearest)", "capped", lambda i, k=k, K=K: min(k * step, rk(i, K))))
+    return rules
 
-    if a.only:
-        import re
-        rules = [r for r in rules if re.search(a.only, r[0])]
-    print(f"## {name}: {len(F)} triangles, {len(Q)} queries, diag {diag:.6g}, mean edge {edge:.4g}")
-    print(f"mean step {step:.4g} ({step / diag * 100:.3f} % of diag; median {med:.4g}; "
-          f"{int(jumps.sum())} jumps > 20x median left out), best distance mean {best.mean():.4g} "
-          f"p50 {np.median(best):.4g} (= {np.median(best) / step:.2f} steps)\n")
 
-    out = {"name": name, "triangles": int(len(F)), "queries": int(len(Q)), "diag": diag, "step": step,
-           "median_step": med, "best_mean": float(best.mean()), "best_p50": float(np.median(best)),
-           "rules": []}
-    print("| r rule | certificates | queries / certificate (mean, p50, p99) | |S| (mean, p50, p99) | "
-          "instr / query (collect exact + scan 25, exact + 40, SIMD 40 + 40) | vs today |")
-    print("|---|---:|---:|---:|---:|---:|")
-    rng = np.random.default_rng(1)
-    for label, kind, rad in rules:
-        centres, radii, served = serve(Q, rad)
-        m = len(centres)
-        sel = np.arange(m) if m <= a.max_centres else np.sort(rng.choice(m, a.max_centres, replace=False))
-        S = np.empty(len(sel))
-        for t, c in enumerate(sel):
-            i = int(centres[c])
-            R = best[i] + 2 * radii[c]
-            S[t] = np.searchsorted(idx.distances_within(Q[i], R * (1 + 1e-12)), R * (1 + 1e-12), "right")
-        sv = served[sel]
-        row = {"rule": label, "kind": kind, "certificates": m, "served": dist_stats(served),
-               "S": dist_stats(S), "S_sampled": int(len(sel))}
-        cost = ""
-        ratio = ""
-        scale = m / len(sel)  # the sampled certificates scaled to all of them
-        row["sums"] = {"S": float(S.sum() * scale), "served_minus_1": float((sv - 1).sum() * scale),
-                       "served_minus_1_times_S": float(((sv - 1) * S).sum() * scale), "queries": int(len(Q))}
-        if a.today is not None and a.tri_instr is not None:
-            ests = []
-            # (collect, scan): S collected at the exact test's cost, scanned at 25 or 40; or S
-            # collected at the scan's cost (block triangles copied and distanced 8 at a time,
-            # the optimistic end: the relaxed traversal's extra nodes and blocks not counted)
-            for ccol, cscan in ((a.tri_instr, 25.0), (a.tri_instr, 40.0), (40.0, 40.0)):
-                # a served query: the ball test, the scan of S, and the winner's exact closest
-                # point in double (one triangle test) for bit-identical answers
-                per_cert = a.today + S * ccol + (sv - 1) * (a.ball_check + S * cscan + a.tri_instr)
-                ests.append(float(per_cert.sum() * scale / len(Q)))
-            row["instr_per_query"] = ests
-            cost = " / ".join(f"{e:,.0f}" for e in ests)
-            ratio = " / ".join(f"{a.today / e:.2f}x" for e in ests)
-        out["rules"].append(row)
-        s1, s2 = row["served"], row["S"]
-        print(f"| {label} | {m} | {s1['mean']:.1f}, {s1['p50']:.0f}, {s1['p99']:.0f} | "
-              f"{s2['mean']:.1f}, {s2['p50']:.0f}, {s2['p99']:.0f} | {cost} | {ratio} |")
+def rule_row(P, a, rng, label, kind, rad):
+    """One rule's certificates along the path, |S| on a sample of them, and the estimated cost."""
+    centres, radii, served = serve(P.Q, rad)
+    m = len(centres)
+    sel = np.arange(m) if m <= a.max_centres else np.sort(rng.choice(m, a.max_centres, replace=False))
+    S = np.empty(len(sel))
+    for t, c in enumerate(sel):
+        i = int(centres[c])
+        R = P.best[i] + 2 * radii[c]
+        S[t] = np.searchsorted(P.idx.distances_within(P.Q[i], R * (1 + 1e-12)), R * (1 + 1e-12), "right")
+    sv = served[sel]
+    row = {"rule": label, "kind": kind, "certificates": m, "served": dist_stats(served),
+           "S": dist_stats(S), "S_sampled": int(len(sel))}
+    scale = m / len(sel)  # the sampled certificates scaled to all of them
+    row["sums"] = {"S": float(S.sum() * scale), "served_minus_1": float((sv - 1).sum() * scale),
+                   "served_minus_1_times_S": float(((sv - 1) * S).sum() * scale), "queries": int(len(P.Q))}
+    if a.today is not None and a.tri_instr is not None:
+        ests = []
+        # (collect, scan): S collected at the exact test's cost, scanned at 25 or 40; or S
+        # collected at the scan's cost (block triangles copied and distanced 8 at a time,
+        # the optimistic end: the relaxed traversal's extra nodes and blocks not counted)
+        for ccol, cscan in ((a.tri_instr, 25.0), (a.tri_instr, 40.0), (40.0, 40.0)):
+            # a served query: the ball test, the scan of S, and the winner's exact closest
+            # point in double (one triangle test) for bit-identical answers
+            per_cert = a.today + S * ccol + (sv - 1) * (a.ball_check + S * cscan + a.tri_instr)
+            ests.append(float(per_cert.sum() * scale / len(P.Q)))
+        row["instr_per_query"] = ests
+    return row
 
-    # Inside: the ball of radius |best(p)| holds no surface
-    centres, radii, served = serve(Q, lambda i: best[i] * (1 - 1e-12))
-    chained = np.zeros(len(Q), dtype=bool)  # q_j within best(q_{j-1}) of q_{j-1}: sign known
-    chained[1:] = steps < best[:-1] * (1 - 1e-12)
+
+def print_rule(row, today):
+    cost = ratio = ""
+    if "instr_per_query" in row:
+        cost = " / ".join(f"{e:,.0f}" for e in row["instr_per_query"])
+        ratio = " / ".join(f"{today / e:.2f}x" for e in row["instr_per_query"])
+    s1, s2 = row["served"], row["S"]
+    print(f"| {row['rule']} | {row['certificates']} | {s1['mean']:.1f}, {s1['p50']:.0f}, {s1['p99']:.0f} | "
+          f"{s2['mean']:.1f}, {s2['p50']:.0f}, {s2['p99']:.0f} | {cost} | {ratio} |")
+
+
+def inside_ball(P, out):
+    """Inside: the ball of radius |best(p)| holds no surface. Returns the chained share."""
+    centres, radii, served = serve(P.Q, lambda i: P.best[i] * (1 - 1e-12))
+    chained = np.zeros(len(P.Q), dtype=bool)  # q_j within best(q_{j-1}) of q_{j-1}: sign known
+    chained[1:] = P.steps < P.best[:-1] * (1 - 1e-12)
     s1 = dist_stats(served)
     out["inside_ball"] = {"certificates": int(len(centres)), "served": s1,
                           "chained_fraction": float(chained.mean())}
@@ -316,18 +315,50 @@ def main(argv=None) -> int:
           f"certificate mean {s1['mean']:.2f}, p50 {s1['p50']:.0f}, p99 {s1['p99']:.0f}, max {s1['max']:.0f}; "
           f"chained (each query within the previous query's distance of it): "
           f"{chained.mean() * 100:.1f} % of queries need no inside test\n")
+    return float(chained.mean())
+
+
+def print_best_rules(a, out, chained):
+    for col, cscan in ((0, "exact collect, 25"), (1, "exact collect, 40"), (2, "SIMD collect, 40")):
+        b = min(out["rules"], key=lambda r: r["instr_per_query"][col])
+        line = (f"Best rule ({cscan}): {b['rule']}, {b['instr_per_query'][col]:,.0f} instructions per "
+                f"unsigned query against {a.today:,.0f} today ({a.today / b['instr_per_query'][col]:.2f}x)")
+        if a.inside_instr is not None:
+            now = a.today + a.inside_instr
+            cert = b["instr_per_query"][col] + a.ball_check + (1 - chained) * a.inside_instr
+            line += (f"; with the sign: {cert:,.0f} (inside only where the chained ball fails) against "
+                     f"{now:,.0f} ({now / cert:.2f}x)")
+            out.setdefault("totals", []).append({"c_scan": cscan, "rule": b["rule"], "cert": cert, "today": now})
+        print(line)
+
+
+def main(argv=None) -> int:
+    a = parse_args(argv)
+    name = a.name or a.mesh.rsplit("/", 1)[-1]
+    P = HapticPath(a)
+    rules = radius_rules(P)
+    if a.only:
+        import re
+        rules = [r for r in rules if re.search(a.only, r[0])]
+    best = P.best
+    print(f"## {name}: {len(P.F)} triangles, {len(P.Q)} queries, diag {P.diag:.6g}, mean edge {P.edge:.4g}")
+    print(f"mean step {P.step:.4g} ({P.step / P.diag * 100:.3f} % of diag; median {P.med:.4g}; "
+          f"{int(P.jumps.sum())} jumps > 20x median left out), best distance mean {best.mean():.4g} "
+          f"p50 {np.median(best):.4g} (= {np.median(best) / P.step:.2f} steps)\n")
+    out = {"name": name, "triangles": int(len(P.F)), "queries": int(len(P.Q)), "diag": P.diag, "step": P.step,
+           "median_step": P.med, "best_mean": float(best.mean()), "best_p50": float(np.median(best)),
+           "rules": []}
+    print("| r rule | certificates | queries / certificate (mean, p50, p99) | |S| (mean, p50, p99) | "
+          "instr / query (collect exact + scan 25, exact + 40, SIMD 40 + 40) | vs today |")
+    print("|---|---:|---:|---:|---:|---:|")
+    rng = np.random.default_rng(1)
+    for label, kind, rad in rules:
+        row = rule_row(P, a, rng, label, kind, rad)
+        out["rules"].append(row)
+        print_rule(row, a.today)
+    chained = inside_ball(P, out)
     if a.today is not None and a.tri_instr is not None:
-        for col, cscan in ((0, "exact collect, 25"), (1, "exact collect, 40"), (2, "SIMD collect, 40")):
-            b = min(out["rules"], key=lambda r: r["instr_per_query"][col])
-            line = (f"Best rule ({cscan}): {b['rule']}, {b['instr_per_query'][col]:,.0f} instructions per "
-                    f"unsigned query against {a.today:,.0f} today ({a.today / b['instr_per_query'][col]:.2f}x)")
-            if a.inside_instr is not None:
-                now = a.today + a.inside_instr
-                cert = b["instr_per_query"][col] + a.ball_check + (1 - chained.mean()) * a.inside_instr
-                line += (f"; with the sign: {cert:,.0f} (inside only where the chained ball fails) against "
-                         f"{now:,.0f} ({now / cert:.2f}x)")
-                out.setdefault("totals", []).append({"c_scan": cscan, "rule": b["rule"], "cert": cert, "today": now})
-            print(line)
+        print_best_rules(a, out, chained)
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)
