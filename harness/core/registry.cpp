@@ -37,8 +37,22 @@ std::string sweep_problem(const MethodInfo& m) {
   return "";
 }
 
+// Path coherence is one concept with one spelling (its variant is a row of its own,
+// docs/architecture.md, "Path coherence").
+std::string coherence_problem(const MethodInfo& m) {
+  const auto it = std::find_if(m.params.begin(), m.params.end(), [](const ParamSpec& p) { return p.name == "coherent"; });
+  const bool declared = it != m.params.end();
+  if (m.caps.coherence && !declared) return "has the coherence capability but no `coherent` option";
+  if (!m.caps.coherence && declared) return "declares `coherent` without the coherence capability";
+  if (declared && (it->type != ParamType::boolean || it->role != ParamRole::query || it->default_value != "false"))
+    return "declares `coherent` other than as a boolean query option, false by default";
+  return "";
+}
+
 void Registry::add(MethodInfo info) {
   if (find(info.name)) throw std::logic_error("method registered twice: " + info.name);
+  if (const std::string bad = coherence_problem(info); !bad.empty())
+    throw std::logic_error("method " + info.name + " " + bad);
   if (const std::string bad = sweep_problem(info); !bad.empty())
     throw std::logic_error("method " + info.name + ": sweep entry " + bad);
   methods_.push_back(std::move(info));

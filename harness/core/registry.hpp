@@ -47,6 +47,11 @@ struct MethodInfo {
 /// the instance (Method::supports).
 bool answers(const MethodInfo& info, const Method& method, QueryType q);
 
+/// Why `m`'s path coherence is declared inconsistently ("" when it is not): a method with the
+/// coherence capability declares the boolean query option `coherent` (false by default), one
+/// without it declares no such option. Registry::add refuses such a method.
+std::string coherence_problem(const MethodInfo& m);
+
 /// Why `m.sweep` does not resolve against `m.params` (the first bad entry and the reason), ""
 /// when every entry does.
 std::string sweep_problem(const MethodInfo& m);

@@ -51,10 +51,6 @@ std::string QueryPlan::label() const {
 
 namespace {
 
-[[noreturn]] void yaml_error(const std::string& file, const YAML::Node& node, const std::string& what) {
-  suite_error(file, node, what);
-}
-
 std::vector<YAML::Node> as_list(const YAML::Node& n) {
   std::vector<YAML::Node> out;
   if (!n) return out;
@@ -66,7 +62,7 @@ std::vector<YAML::Node> as_list(const YAML::Node& n) {
 }
 
 std::string scalar(const std::string& file, const YAML::Node& n, const std::string& what) {
-  if (!n.IsScalar()) yaml_error(file, n, what + " must be a scalar");
+  if (!n.IsScalar()) suite_error(file, n, what + " must be a scalar");
   return n.as<std::string>();
 }
 
@@ -81,13 +77,13 @@ std::vector<std::string> expand_all(const std::string& file, const YAML::Node& n
     try {
       all = n["all"].as<bool>();
     } catch (const YAML::Exception&) {
-      yaml_error(file, n["all"], "all: is true or false");
+      suite_error(file, n["all"], "all: is true or false");
     }
     if (!all) return {};
     for (auto x : as_list(n["except"])) {
       const std::string name = scalar(file, x, "a method name in except:");
       if (!Registry::global().find(name) && !Registry::global().is_left_out(name))
-        yaml_error(file, x, "except: names no method: '" + name + "'");
+        suite_error(file, x, "except: names no method: '" + name + "'");
       except.push_back(name);
     }
   }
@@ -107,22 +103,22 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
   if (n.IsScalar() && n.as<std::string>() == "all") return expand_all(file, n);
   if (n.IsMap() && n["all"]) return expand_all(file, n);
   if (n.IsScalar()) return {n.as<std::string>()};
-  if (!n.IsMap() || !n["name"]) yaml_error(file, n, "a method is NAME, NAME:k=v or {name:, params:}");
+  if (!n.IsMap() || !n["name"]) suite_error(file, n, "a method is NAME, NAME:k=v or {name:, params:}");
   std::string name = scalar(file, n["name"], "method name");
   check_suite_keys(file, n, SuiteLevel::method, declared_options(name));
   std::vector<std::string> specs = {""};
   if (auto ps = n["params"]) {
-    if (!ps.IsMap()) yaml_error(file, ps, "method params must be a map");
+    if (!ps.IsMap()) suite_error(file, ps, "method params must be a map");
     std::vector<std::pair<std::string, std::vector<std::string>>> axes;
     for (auto kv : ps) {
       std::vector<std::string> vals;
       for (auto v : as_list(kv.second)) vals.push_back(scalar(file, v, "parameter value"));
-      if (vals.empty()) yaml_error(file, kv.second, "empty value list for " + kv.first.as<std::string>());
+      if (vals.empty()) suite_error(file, kv.second, "empty value list for " + kv.first.as<std::string>());
       axes.push_back({kv.first.as<std::string>(), vals});
     }
     for (auto& [k, vals] : axes) {
       if (specs.size() * vals.size() > kMaxSuiteJobs)
-        yaml_error(file, n, "the parameter sweep makes more than " + std::to_string(kMaxSuiteJobs) + " variants");
+        suite_error(file, n, "the parameter sweep makes more than " + std::to_string(kMaxSuiteJobs) + " variants");
       std::vector<std::string> next;
       for (auto& s : specs)
         for (auto& v : vals) next.push_back(s + (s.empty() ? "" : ",") + k + "=" + v);
@@ -139,25 +135,25 @@ std::vector<std::string> expand_method(const std::string& file, const YAML::Node
 QueryPlan file_query_plan(const std::string& suite, const YAML::Node& n, const fs::path& base,
                           std::map<std::string, std::string>& labels) {
   for (const char* key : {"kind", "n", "seed", "params"})
-    if (n[key]) yaml_error(suite, n, std::string("a points file ({file:, name:}) takes no '") + key + "'");
+    if (n[key]) suite_error(suite, n, std::string("a points file ({file:, name:}) takes no '") + key + "'");
   check_suite_keys(suite, n, SuiteLevel::points_file);
   QueryPlan q;
   q.kind = "file";
   q.file = scalar(suite, n["file"], "file");
-  if (q.file.empty()) yaml_error(suite, n, "file: is empty");
+  if (q.file.empty()) suite_error(suite, n, "file: is empty");
   if (fs::path(q.file).is_relative()) q.file = (base / q.file).lexically_normal().string();
   q.name = n["name"] ? scalar(suite, n["name"], "name") : fs::path(q.file).stem().string();
-  if (q.name.empty()) yaml_error(suite, n, "name: is empty");
+  if (q.name.empty()) suite_error(suite, n, "name: is empty");
   auto [it, fresh] = labels.emplace(q.label(), q.file);
   if (!fresh && it->second != q.file)
-    yaml_error(suite, n, "two points files are named '" + q.name + "' (" + it->second + " and " + q.file +
+    suite_error(suite, n, "two points files are named '" + q.name + "' (" + it->second + " and " + q.file +
                              "); give one a name: to tell their jobs apart");
   return q;
 }
 
 // The query set's `params:`, each checked against the kind's declaration where it stands.
 std::map<std::string, double> query_set_params(const std::string& file, const QueryKind& kind, const YAML::Node& ps) {
-  if (!ps.IsMap()) yaml_error(file, ps, "a query set's params: is a map {name: value}");
+  if (!ps.IsMap()) suite_error(file, ps, "a query set's params: is a map {name: value}");
   std::map<std::string, double> out;
   for (auto kv : ps) {
     const std::string key = kv.first.as<std::string>();
@@ -165,7 +161,7 @@ std::map<std::string, double> query_set_params(const std::string& file, const Qu
     try {
       out[key] = query_kind_params(kind, {{key, text}}).get_real(key);
     } catch (const InputError& e) {
-      yaml_error(file, kv.first, e.what());
+      suite_error(file, kv.first, e.what());
     }
   }
   return out;
@@ -175,21 +171,19 @@ std::map<std::string, double> query_set_params(const std::string& file, const Qu
 QueryPlan generated_query_plan(const std::string& file, const YAML::Node& n) {
   QueryPlan q;
   if (!n.IsScalar() && !n.IsMap())
-    yaml_error(file, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
-  if (n.IsMap() && n["name"]) yaml_error(file, n, "name: is for a points file ({file: PATH, name: NAME})");
+    suite_error(file, n, "a query set is a kind, {kind:, n:, seed:, params:} or {file:, name:}");
+  if (n.IsMap() && n["name"]) suite_error(file, n, "name: is for a points file ({file: PATH, name: NAME})");
   try {
     q.kind = n.IsScalar() ? n.as<std::string>() : n["kind"] ? n["kind"].as<std::string>() : q.kind;
   } catch (const YAML::Exception& e) {
-    yaml_error(file, n, std::string("bad query set: ") + e.what());
+    suite_error(file, n, std::string("bad query set: ") + e.what());
   }
-  if (q.kind == "file") yaml_error(file, n, "a points file is given as {file: PATH}");
-  const QueryKind* kind = find_query_kind(q.kind);
-  if (!kind) {
-    try {
-      query_kind(q.kind);  // the message with the known kinds and the nearest one
-    } catch (const InputError& e) {
-      yaml_error(file, n, e.what());
-    }
+  if (q.kind == "file") suite_error(file, n, "a points file is given as {file: PATH}");
+  const QueryKind* kind = nullptr;
+  try {
+    kind = &query_kind(q.kind);
+  } catch (const InputError& e) {  // names the known kinds and the nearest one
+    suite_error(file, n, e.what());
   }
   if (!n.IsMap()) return q;
   check_suite_keys(file, n, SuiteLevel::query_set, kind->params);
@@ -197,10 +191,10 @@ QueryPlan generated_query_plan(const std::string& file, const YAML::Node& n) {
     if (n["n"]) q.n = n["n"].as<std::size_t>();
     if (n["seed"]) q.seed = n["seed"].as<std::uint64_t>();
   } catch (const YAML::Exception& e) {
-    yaml_error(file, n, std::string("bad query set: ") + e.what());
+    suite_error(file, n, std::string("bad query set: ") + e.what());
   }
   if (n["params"]) q.params = query_set_params(file, *kind, n["params"]);
-  if (q.n == 0) yaml_error(file, n, "n must be > 0");
+  if (q.n == 0) suite_error(file, n, "n must be > 0");
   return q;
 }
 
@@ -244,7 +238,7 @@ std::vector<MeshPlan> read_meshes(const std::string& path, const YAML::Node& lis
       mp.path = n["path"].as<std::string>();
       if (n["name"]) mp.name = n["name"].as<std::string>();
     } else {
-      yaml_error(path, n, "a mesh is a path or {path:, name:}");
+      suite_error(path, n, "a mesh is a path or {path:, name:}");
     }
     if (fs::path(mp.path).is_relative()) mp.path = (base / mp.path).lexically_normal().string();
     if (mp.name.empty()) mp.name = fs::path(mp.path).stem().string();
@@ -259,7 +253,7 @@ std::vector<QueryType> read_query_types(const std::string& path, const YAML::Nod
     try {
       types.push_back(parse_query_type(n.as<std::string>()));
     } catch (const InputError& e) {
-      yaml_error(path, n, e.what());
+      suite_error(path, n, e.what());
     }
   }
   return types;
@@ -273,10 +267,10 @@ std::vector<MethodSpec> read_methods(const std::string& path, const YAML::Node& 
       // method this build left out (a Python method whose package is not installed) is no typo:
       // its jobs stay in the suite, unresolved, and become `unsupported` rows with the reason.
       MethodSpec spec = Registry::global().describe(s);
-      if (!spec.resolved() && !Registry::global().is_left_out(spec.name)) yaml_error(path, n, spec.problem);
+      if (!spec.resolved() && !Registry::global().is_left_out(spec.name)) suite_error(path, n, spec.problem);
       methods.push_back(std::move(spec));
       if (methods.size() > kMaxSuiteJobs)
-        yaml_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
+        suite_error(path, n, "more than " + std::to_string(kMaxSuiteJobs) + " method variants in one matrix");
     }
   return methods;
 }
@@ -289,13 +283,13 @@ std::vector<int> read_thread_counts(const std::string& path, const YAML::Node& m
     try {
       t = n.as<int>();
     } catch (const YAML::Exception&) {
-      yaml_error(path, n, "threads: is a thread count or a list of them");
+      suite_error(path, n, "threads: is a thread count or a list of them");
     }
     if (t < 1 || t > kMaxJobThreads)
-      yaml_error(path, n, "threads must be between 1 and " + std::to_string(kMaxJobThreads));
+      suite_error(path, n, "threads must be between 1 and " + std::to_string(kMaxJobThreads));
     if (std::find(thread_counts.begin(), thread_counts.end(), t) == thread_counts.end()) thread_counts.push_back(t);
   }
-  if (thread_counts.empty()) yaml_error(path, m, "threads: is an empty list");
+  if (thread_counts.empty()) suite_error(path, m, "threads: is an empty list");
   return thread_counts;
 }
 
@@ -314,10 +308,10 @@ struct MatrixAxes {
 
 MatrixAxes read_matrix(const std::string& path, const YAML::Node& m, const fs::path& base,
                        std::map<std::string, std::string>& query_files) {
-  if (!m.IsMap()) yaml_error(path, m, "each matrix is a map");
+  if (!m.IsMap()) suite_error(path, m, "each matrix is a map");
   check_suite_keys(path, m, SuiteLevel::matrix);
   for (const char* key : {"meshes", "queries", "methods"})
-    if (!m[key]) yaml_error(path, m, std::string("matrix without '") + key + "'");
+    if (!m[key]) suite_error(path, m, std::string("matrix without '") + key + "'");
   MatrixAxes axes;
   axes.meshes = read_meshes(path, m["meshes"], base);
   for (auto n : as_list(m["queries"]))
@@ -369,7 +363,7 @@ SuiteConfig expand_suite(const YAML::Node& root, const std::string& path) {
     const MatrixAxes axes = read_matrix(path, m, base, query_files);
     expanded += axes.jobs();  // before the product is made
     if (expanded > double(kMaxSuiteJobs))
-      yaml_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
+      suite_error(path, m, "the suite expands to more than " + std::to_string(kMaxSuiteJobs) +
                               " jobs (meshes x query sets x queries x method variants, over all matrices): split it");
     add_jobs(axes, seen, cfg.jobs);
   }

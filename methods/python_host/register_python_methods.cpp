@@ -2,6 +2,7 @@
 // methods/CMakeLists.txt, and those in BVHBENCH_PYTHON_METHODS (folders separated by ':', to try a
 // method without rebuilding). A folder that cannot be offered (its package is not installed, its
 // declarations are malformed, Python cannot start) is left out with a note, never an error.
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -73,6 +74,8 @@ MethodInfo method_info(const py::dict& d, const std::string& folder) {
   m.params.push_back({"batch", ParamType::boolean, ParamRole::query, "false",
                       "answer the whole query set per call: throughput per whole-set call, no per-query latency",
                       {}, 0, 1});
+  // A method that keeps state along a path says so as a `coherent` option (registry.hpp).
+  m.caps.coherence = std::any_of(m.params.begin(), m.params.end(), [](const ParamSpec& s) { return s.name == "coherent"; });
   m.sweep = d["sweep"].cast<std::vector<std::string>>();
   m.create = [decl](const Params& p) { return std::make_unique<PythonMethod>(decl, p); };
   return m;
@@ -123,6 +126,10 @@ void bvhbench_register_python_host(bvhbench::Registry& r) {
       // when the method is found, not when a `methods: all` suite first expands it.
       if (const std::string bad = sweep_problem(m); !bad.empty()) {
         r.add_left_out(name, folder + "/method.py: SWEEP: " + bad);
+        continue;
+      }
+      if (const std::string bad = coherence_problem(m); !bad.empty()) {
+        r.add_left_out(name, folder + "/method.py: PARAMETERS: " + bad);
         continue;
       }
       r.add(std::move(m));

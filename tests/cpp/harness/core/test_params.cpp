@@ -141,3 +141,24 @@ TEST(Registry, EveryMethodDeclaresSaneParameters) {
     EXPECT_EQ(sweep_problem(m), "");
   }
 }
+
+// Path coherence has one spelling: the capability and a boolean query option `coherent`, false by
+// default, together or not at all (docs/architecture.md, "Path coherence").
+TEST(Params, CoherenceIsDeclaredOneWay) {
+  MethodInfo m;
+  m.name = "m";
+  EXPECT_EQ(coherence_problem(m), "");
+  m.caps.coherence = true;
+  EXPECT_NE(coherence_problem(m), "");  // the capability without the option
+  m.params = {{"coherent", ParamType::boolean, ParamRole::query, "false", "keep state along a path", {}}};
+  EXPECT_EQ(coherence_problem(m), "");
+  m.params[0].default_value = "true";
+  EXPECT_NE(coherence_problem(m), "");  // on by default: its row would not be the method's own
+  m.params[0].default_value = "false";
+  m.params[0].role = ParamRole::build;
+  EXPECT_NE(coherence_problem(m), "");
+  m.params[0].role = ParamRole::query;
+  m.caps.coherence = false;
+  EXPECT_NE(coherence_problem(m), "");  // the option without the capability
+  for (const MethodInfo& r : Registry::global().methods()) EXPECT_EQ(coherence_problem(r), "") << r.name;
+}
