@@ -16,7 +16,7 @@ namespace bvhbench {
 /// One ParamSpec (ParamRole::build) per build option, in the table's order.
 std::vector<ParamSpec> build_option_specs();
 
-/// The build options' names, "leaf_factor, max_planes, ..." (listings and messages).
+/// The build options' names in the table's order, ", "-separated (listings and messages).
 std::string build_option_names();
 
 /// Whether `name` is a build option of the table.

@@ -11,8 +11,8 @@
 namespace ebp {
 namespace {
 
-// Stores written before the table keep reading: the options sit where leaf_factor, cluster_angle
-// and max_planes always sat.
+// Stores written before the table keep reading: the options sit where the three named fields
+// (the two reals, then the integer) always sat.
 static_assert(offsetof(FileHeader, build_reals) == 56 && offsetof(FileHeader, build_ints) == 72,
               "the build options' place in the header is fixed");
 
