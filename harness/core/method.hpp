@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -129,6 +130,11 @@ class Method : public QueryState {
   /// A result records these in place of the spec's, so that it states what ran. Read after
   /// build(). Default: none (the structure was built from the spec's options).
   virtual std::map<std::string, std::string> build_options_read() const { return {}; }
+
+  /// For a structure read from a file: the threads it was built with, as the file records them
+  /// (JSON null where the file does not say). A result records this as build.threads, not the
+  /// job's T. Read after build(). Default: nullopt, the job built the structure itself.
+  virtual std::optional<nlohmann::json> build_threads_read() const { return std::nullopt; }
 
   /// Facts about the built structure worth recording (levels, node counts, ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }

@@ -248,7 +248,14 @@ class PlyParser final : public FormatParser {
   }
 
  private:
+  /// The header: its lines (format, elements and their properties), then what each element is.
   void parse_header() {
+    read_header_lines();
+    assign_element_roles();
+  }
+
+  /// The header's lines up to 'end_header': the format, the elements and their properties.
+  void read_header_lines() {
     if (!src_.fill(4) || std::memcmp(src_.p, "ply", 3) != 0 || (src_.p[3] != '\n' && src_.p[3] != '\r'))
       throw error("not a PLY file: bad magic (the first line is not 'ply')");
     std::string_view ln;
@@ -265,15 +272,7 @@ class PlyParser final : public FormatParser {
       if (kw == "end_header") {
         ended = true;
       } else if (kw == "format") {
-        const std::string_view f = next_token(rest);
-        if (f == "ascii")
-          format_ = PlyFormat::ascii;
-        else if (f == "binary_little_endian")
-          format_ = PlyFormat::binary_le;
-        else if (f == "binary_big_endian")
-          format_ = PlyFormat::binary_be;
-        else
-          throw error(where() + "unknown PLY format " + quoted_excerpt(f));
+        format_ = parse_format(next_token(rest), where());
         have_format = true;
       } else if (kw == "element") {
         PlyElement el;
@@ -285,24 +284,40 @@ class PlyParser final : public FormatParser {
         elements_.push_back(std::move(el));
       } else if (kw == "property") {
         if (elements_.empty()) throw error(where() + "property before any element");
-        PlyProperty prop;
-        std::string_view t = next_token(rest);
-        if (t == "list") {
-          prop.list = true;
-          if (!ply_type(next_token(rest), prop.count_type) || !is_integer(prop.count_type))
-            throw error(where() + "bad list count type in " + quoted_excerpt(ln));
-          t = next_token(rest);
-        }
-        if (!ply_type(t, prop.type)) throw error(where() + "unknown property type " + quoted_excerpt(t));
-        prop.name = std::string(next_token(rest));
-        if (prop.name.empty()) throw error(where() + "property without a name");
-        elements_.back().props.push_back(std::move(prop));
+        elements_.back().props.push_back(parse_property(rest, ln, where()));
       } else {
         throw error(where() + "unexpected header line " + quoted_excerpt(ln));
       }
     }
     if (!have_format) throw error("PLY header has no 'format' line");
+  }
 
+  PlyFormat parse_format(std::string_view f, const std::string& where) const {
+    if (f == "ascii") return PlyFormat::ascii;
+    if (f == "binary_little_endian") return PlyFormat::binary_le;
+    if (f == "binary_big_endian") return PlyFormat::binary_be;
+    throw error(where + "unknown PLY format " + quoted_excerpt(f));
+  }
+
+  /// A 'property' line's rest: `[list COUNT_TYPE] TYPE NAME`.
+  PlyProperty parse_property(std::string_view rest, std::string_view ln, const std::string& where) const {
+    PlyProperty prop;
+    std::string_view t = next_token(rest);
+    if (t == "list") {
+      prop.list = true;
+      if (!ply_type(next_token(rest), prop.count_type) || !is_integer(prop.count_type))
+        throw error(where + "bad list count type in " + quoted_excerpt(ln));
+      t = next_token(rest);
+    }
+    if (!ply_type(t, prop.type)) throw error(where + "unknown property type " + quoted_excerpt(t));
+    prop.name = std::string(next_token(rest));
+    if (prop.name.empty()) throw error(where + "property without a name");
+    return prop;
+  }
+
+  /// Which element holds the vertices, the faces and the triangle strips, with their properties
+  /// checked; the vertex count.
+  void assign_element_roles() {
     const PlyElement* vertex = nullptr;
     const PlyElement* faces = nullptr;
     const PlyElement* strips = nullptr;

@@ -214,9 +214,19 @@ json side_info(const ResultSet& s) {
           {"machines", machines}};
 }
 
-/// One row: everything known about a (base, new) pair. Either may be null (missing / new).
-json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
-  const json& any = b ? *b : *n;
+/// A row being decided: its JSON, the reasons found so far, its verdict and whether it gates.
+struct Row {
+  json p;
+  json reasons = json::array();
+  std::string verdict;
+  bool gates = false;
+  void reason(const std::string& code, const std::string& detail) {
+    reasons.push_back({{"code", code}, {"detail", detail}});
+  }
+};
+
+/// What names the pair's job in a row.
+json row_header(const json& any) {
   json p;
   p["job"] = job_label(any);
   p["method"] = str(json_at(any, {"job", "method"}));
@@ -224,149 +234,175 @@ json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
   p["mesh"] = str(json_at(any, {"job", "mesh", "name"}));
   p["query_kind"] = str(json_at(any, {"job", "queries", "kind"}));
   p["query"] = str(json_at(any, {"job", "query"}));
-  json reasons = json::array();
-  bool gates = false;
-  std::string verdict;
-  auto reason = [&](const std::string& code, const std::string& detail) {
-    reasons.push_back({{"code", code}, {"detail", detail}});
+  return p;
+}
+
+/// The inputs in which a pair paired by job id differs (a query generator, a mesh file or a
+/// default parameter changed): then the deterministic figures cannot be compared, the baseline
+/// is stale. "" when none. Parameters are compared only when both are ok (status rows carry
+/// unresolved ones); of an object, only the keys that differ are named.
+std::string changed_inputs(const json& b, const json& n, bool both_ok) {
+  std::string inputs;
+  auto add = [&](const std::string& item) { inputs += (inputs.empty() ? "" : ", ") + item; };
+  auto differs = [&](std::initializer_list<const char*> path, const char* what, bool both_ok_only) {
+    const json& x = json_at(b, path);
+    const json& y = json_at(n, path);
+    if (both_ok_only && !both_ok) return;
+    if (x.is_null() || y.is_null() || x == y) return;
+    if (x.is_object() && y.is_object()) {
+      std::set<std::string> keys;
+      for (auto& [k, v] : x.items()) keys.insert(k);
+      for (auto& [k, v] : y.items()) keys.insert(k);
+      for (auto& k : keys) {
+        const json vx = x.contains(k) ? x[k] : json(nullptr), vy = y.contains(k) ? y[k] : json(nullptr);
+        if (vx != vy) add(std::string(what) + " " + k + " " + show(vx) + " -> " + show(vy));
+      }
+      return;
+    }
+    add(std::string(what) + " " + (x.is_string() ? printable(x.get<std::string>().substr(0, 16)) : x.dump()) + " -> " +
+        (y.is_string() ? printable(y.get<std::string>().substr(0, 16)) : y.dump()));
   };
-  if (!n) {
-    verdict = "missing";
-    gates = !opt.ignore_missing;
-    reason("missing", "in BASE, not in NEW");
-  } else if (!b) {
-    verdict = "new";
-    reason("new", "in NEW, not in BASE");
-  } else {
-    const std::string sb = str(json_at(*b, {"status"})), sn = str(json_at(*n, {"status"}));
-    p["status"] = {{"base", sb}, {"new", sn}};
-    // Paired by job id although the inputs differ (a query generator, a mesh file or a default
-    // parameter changed): the deterministic figures cannot be compared, the baseline is stale.
-    std::string inputs;
-    auto differs = [&](std::initializer_list<const char*> path, const char* what, bool both_ok_only) {
-      const json& x = json_at(*b, path);
-      const json& y = json_at(*n, path);
-      if (both_ok_only && (sb != "ok" || sn != "ok")) return;  // status rows carry unresolved params
-      if (x.is_null() || y.is_null() || x == y) return;
-      if (x.is_object() && y.is_object()) {  // name the parameters that differ, not all of them
-        std::set<std::string> keys;
-        for (auto& [k, v] : x.items()) keys.insert(k);
-        for (auto& [k, v] : y.items()) keys.insert(k);
-        for (auto& k : keys) {
-          const json vx = x.contains(k) ? x[k] : json(nullptr), vy = y.contains(k) ? y[k] : json(nullptr);
-          if (vx != vy) inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " + k + " " + show(vx) + " -> " + show(vy);
-        }
-        return;
-      }
-      inputs += (inputs.empty() ? "" : ", ") + std::string(what) + " " +
-                (x.is_string() ? printable(x.get<std::string>().substr(0, 16)) : x.dump()) + " -> " +
-                (y.is_string() ? printable(y.get<std::string>().substr(0, 16)) : y.dump());
-    };
-    differs({"job", "mesh", "sha256"}, "mesh sha256", false);
-    differs({"job", "queries", "sha256"}, "query-set sha256", false);
-    differs({"job", "method"}, "method", true);
-    differs({"job", "params"}, "params", true);
-    differs({"job", "query"}, "query", false);
-    if (!inputs.empty()) reason("inputs_changed", inputs);
-    if (sb == "ok" && sn != "ok") {
-      verdict = "failed";
-      gates = true;
-      reason("failed", "status ok -> " + sn + (str(json_at(*n, {"message"})).empty() ? "" : ": " + str(json_at(*n, {"message"}))));
-    } else if (sb != "ok" && sn == "ok") {
-      verdict = "improved";
-      reason("fixed", "status " + sb + " -> ok");
-    } else if (sb != sn) {
-      verdict = "regressed";
-      gates = true;
-      reason("status_changed", "status " + sb + " -> " + sn);
-    } else if (sb != "ok") {
-      verdict = "unchanged";
-    } else {
-      // Both ok: deterministic work first, then accuracy, then timing.
-      // The counters NEW declares machine-dependent (its code knows best) gate exactly only
-      // when both sides carry the same machine fingerprint; otherwise they are reported.
-      std::set<std::string> machine;
-      for (auto& v : json_at(*n, {"machine_dependent", "counters"})) machine.insert(v.get<std::string>());
-      std::vector<std::string> fp_diffs;
-      const std::string not_gated_why = machine.empty() ? "" : machine_not_gated_reason(*b, *n, &fp_diffs);
-      json counters = json::array(), counters_not_gated = json::array();
-      std::size_t not_gated_values = 0;
-      for (auto& [k, vb, vn] : paired_leaves(json_at(*b, {"counters"}).is_object() ? json_at(*b, {"counters"}) : json::object(),
-                                             json_at(*n, {"counters"}).is_object() ? json_at(*n, {"counters"}) : json::object())) {
-        const bool changed = !same_value(vb, vn, 0.0);
-        // A counter that appears or disappears is a change of the method's code: it gates.
-        if (!not_gated_why.empty() && machine.count(k) && !vb.is_null() && !vn.is_null()) {
-          ++not_gated_values;
-          if (changed) counters_not_gated.push_back({{"name", k}, {"base", vb}, {"new", vn}});
-        } else if (changed) {
-          counters.push_back({{"name", k}, {"base", vb}, {"new", vn}});
-        }
-      }
-      auto changes_text = [](const json& list) {
-        std::string d;
-        for (auto& c : list) d += (d.empty() ? "" : ", ") + c["name"].get<std::string>() + " " + change_text(c["base"], c["new"]);
-        return d;
-      };
-      if (!counters.empty()) {
-        reason("counters_changed", changes_text(counters));
-        p["counters"] = counters;
-      }
-      if (!machine.empty())
-        p["machine_dependent"] = {{"counters", machine},
+  differs({"job", "mesh", "sha256"}, "mesh sha256", false);
+  differs({"job", "queries", "sha256"}, "query-set sha256", false);
+  differs({"job", "method"}, "method", true);
+  differs({"job", "params"}, "params", true);
+  differs({"job", "query"}, "query", false);
+  return inputs;
+}
+
+std::string changes_text(const json& list, const char* name_key) {
+  std::string d;
+  for (auto& c : list) d += (d.empty() ? "" : ", ") + c[name_key].get<std::string>() + " " + change_text(c["base"], c["new"]);
+  return d;
+}
+
+/// The counters of two ok results. Those NEW declares machine-dependent (its code knows best)
+/// gate exactly only when both sides carry the same machine fingerprint; otherwise they are
+/// reported. Returns whether a gating counter changed.
+bool compare_counters(const json& b, const json& n, Row& row) {
+  std::set<std::string> machine;
+  for (auto& v : json_at(n, {"machine_dependent", "counters"})) machine.insert(v.get<std::string>());
+  std::vector<std::string> fp_diffs;
+  const std::string not_gated_why = machine.empty() ? "" : machine_not_gated_reason(b, n, &fp_diffs);
+  json counters = json::array(), counters_not_gated = json::array();
+  std::size_t not_gated_values = 0;
+  auto object_at = [](const json& r) { return json_at(r, {"counters"}).is_object() ? json_at(r, {"counters"}) : json::object(); };
+  for (auto& [k, vb, vn] : paired_leaves(object_at(b), object_at(n))) {
+    const bool changed = !same_value(vb, vn, 0.0);
+    // A counter that appears or disappears is a change of the method's code: it gates.
+    if (!not_gated_why.empty() && machine.count(k) && !vb.is_null() && !vn.is_null()) {
+      ++not_gated_values;
+      if (changed) counters_not_gated.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+    } else if (changed) {
+      counters.push_back({{"name", k}, {"base", vb}, {"new", vn}});
+    }
+  }
+  if (!counters.empty()) {
+    row.reason("counters_changed", changes_text(counters, "name"));
+    row.p["counters"] = counters;
+  }
+  if (!machine.empty())
+    row.p["machine_dependent"] = {{"counters", machine},
                                   {"gated", not_gated_why.empty()},
                                   {"not_gated_because", not_gated_why.empty() ? json(nullptr) : json(not_gated_why)},
                                   {"fingerprint_differences", fp_diffs},
                                   {"values_not_gated", not_gated_values}};
-      if (!counters_not_gated.empty()) {
-        reason("machine_counters_not_gated", changes_text(counters_not_gated) + "; not gated: " + not_gated_why);
-        p["counters_not_gated"] = counters_not_gated;
-      }
-      json accuracy = json::array();
-      const json& ab = json_at(*b, {"accuracy"});
-      const json& an = json_at(*n, {"accuracy"});
-      if (ab.is_null() != an.is_null()) {
-        accuracy.push_back({{"field", "accuracy"}, {"base", ab.is_null() ? "none" : "measured"}, {"new", an.is_null() ? "none" : "measured"}});
-      } else if (!ab.is_null()) {
-        for (auto& [k, vb, vn] : paired_leaves(ab, an))
-          if (!same_value(vb, vn, opt.rtol)) accuracy.push_back({{"field", k}, {"base", vb}, {"new", vn}});
-      }
-      if (!accuracy.empty()) {
-        std::string d;
-        for (auto& a : accuracy) d += (d.empty() ? "" : ", ") + a["field"].get<std::string>() + " " + change_text(a["base"], a["new"]);
-        reason("accuracy_changed", d);
-        p["accuracy"] = accuracy;
-      }
-      const json& bb = json_at(*b, {"build", "structure_bytes"});
-      const json& bn = json_at(*n, {"build", "structure_bytes"});
-      if (bb.is_number() && bn.is_number() && bb != bn) p["structure_bytes"] = {{"base", bb}, {"new", bn}};
+  if (!counters_not_gated.empty()) {
+    row.reason("machine_counters_not_gated", changes_text(counters_not_gated, "name") + "; not gated: " + not_gated_why);
+    row.p["counters_not_gated"] = counters_not_gated;
+  }
+  return !counters.empty();
+}
 
-      json t = timing_block(*b, *n, opt);
-      const std::string tv = t["verdict"];
-      p["timing"] = t;
-      const bool deterministic_change = !counters.empty() || !accuracy.empty();
-      if (tv != "unchanged") {
-        const bool tg = opt.timing_gates && tv == "regressed";
-        reason(tv == "regressed" ? "throughput_regressed" : "throughput_improved",
+/// The accuracy of two ok results, within opt.rtol. Returns whether it changed.
+bool compare_accuracy(const json& b, const json& n, const CompareOptions& opt, Row& row) {
+  json accuracy = json::array();
+  const json& ab = json_at(b, {"accuracy"});
+  const json& an = json_at(n, {"accuracy"});
+  if (ab.is_null() != an.is_null()) {
+    accuracy.push_back({{"field", "accuracy"}, {"base", ab.is_null() ? "none" : "measured"}, {"new", an.is_null() ? "none" : "measured"}});
+  } else if (!ab.is_null()) {
+    for (auto& [k, vb, vn] : paired_leaves(ab, an))
+      if (!same_value(vb, vn, opt.rtol)) accuracy.push_back({{"field", k}, {"base", vb}, {"new", vn}});
+  }
+  if (accuracy.empty()) return false;
+  row.reason("accuracy_changed", changes_text(accuracy, "field"));
+  row.p["accuracy"] = accuracy;
+  return true;
+}
+
+/// Both ok: deterministic work first, then accuracy, then timing.
+void compare_ok_pair(const json& b, const json& n, const CompareOptions& opt, Row& row) {
+  const bool counters_changed = compare_counters(b, n, row);
+  const bool accuracy_changed = compare_accuracy(b, n, opt, row);
+  const json& bb = json_at(b, {"build", "structure_bytes"});
+  const json& bn = json_at(n, {"build", "structure_bytes"});
+  if (bb.is_number() && bn.is_number() && bb != bn) row.p["structure_bytes"] = {{"base", bb}, {"new", bn}};
+
+  json t = timing_block(b, n, opt);
+  const std::string tv = t["verdict"];
+  row.p["timing"] = t;
+  if (tv != "unchanged") {
+    const bool tg = opt.timing_gates && tv == "regressed";
+    row.reason(tv == "regressed" ? "throughput_regressed" : "throughput_improved",
                "normalised throughput " + fmt(100 * t["change"].get<double>(), "%+.1f") + "%, p=" +
                    fmt(t["p_value"].get<double>(), "%.2g") + (tv == "regressed" && !opt.timing_gates ? " (reported, not gating)" : ""));
-        gates = gates || tg;
-      }
-      if (deterministic_change) {
-        verdict = "regressed";  // any change of deterministic work or accuracy: rebaseline or fix
-        gates = true;
-      } else {
-        verdict = tv;
-      }
-    }
+    row.gates = row.gates || tg;
   }
-  if (!reasons.empty() && reasons[0]["code"] == "inputs_changed") {
-    gates = true;
-    if (verdict == "unchanged" || verdict == "improved") verdict = "regressed";
+  if (counters_changed || accuracy_changed) {
+    row.verdict = "regressed";  // any change of deterministic work or accuracy: rebaseline or fix
+    row.gates = true;
+  } else {
+    row.verdict = tv;
   }
-  p["verdict"] = verdict;
-  p["reasons"] = reasons;
-  p["gates"] = gates;
-  return p;
+}
+
+/// A pair present on both sides: inputs, then statuses, then (both ok) the figures.
+void compare_both(const json& b, const json& n, const CompareOptions& opt, Row& row) {
+  const std::string sb = str(json_at(b, {"status"})), sn = str(json_at(n, {"status"}));
+  row.p["status"] = {{"base", sb}, {"new", sn}};
+  const std::string inputs = changed_inputs(b, n, sb == "ok" && sn == "ok");
+  if (!inputs.empty()) row.reason("inputs_changed", inputs);
+  if (sb == "ok" && sn != "ok") {
+    row.verdict = "failed";
+    row.gates = true;
+    row.reason("failed", "status ok -> " + sn + (str(json_at(n, {"message"})).empty() ? "" : ": " + str(json_at(n, {"message"}))));
+  } else if (sb != "ok" && sn == "ok") {
+    row.verdict = "improved";
+    row.reason("fixed", "status " + sb + " -> ok");
+  } else if (sb != sn) {
+    row.verdict = "regressed";
+    row.gates = true;
+    row.reason("status_changed", "status " + sb + " -> " + sn);
+  } else if (sb != "ok") {
+    row.verdict = "unchanged";
+  } else {
+    compare_ok_pair(b, n, opt, row);
+  }
+}
+
+/// One row: everything known about a (base, new) pair. Either may be null (missing / new).
+json compare_pair(const json* b, const json* n, const CompareOptions& opt) {
+  Row row;
+  row.p = row_header(b ? *b : *n);
+  if (!n) {
+    row.verdict = "missing";
+    row.gates = !opt.ignore_missing;
+    row.reason("missing", "in BASE, not in NEW");
+  } else if (!b) {
+    row.verdict = "new";
+    row.reason("new", "in NEW, not in BASE");
+  } else {
+    compare_both(*b, *n, opt, row);
+  }
+  if (!row.reasons.empty() && row.reasons[0]["code"] == "inputs_changed") {
+    row.gates = true;
+    if (row.verdict == "unchanged" || row.verdict == "improved") row.verdict = "regressed";
+  }
+  row.p["verdict"] = row.verdict;
+  row.p["reasons"] = row.reasons;
+  row.p["gates"] = row.gates;
+  return row.p;
 }
 
 /// Pairs results in stages: same primary key and same job id; same primary key; same

@@ -254,6 +254,7 @@ json run_job(const JobSpec& spec) {
       for (const auto& kv : read) keys.push_back(kv.first);
       r["job"]["params_read_from_structure"] = keys;
     }
+    if (const auto threads = method->build_threads_read()) r["build"]["threads"] = *threads;
 
     // The method keeps what it needs: release the mesh so query memory is the method's own.
     { Mesh released = std::move(mesh); }

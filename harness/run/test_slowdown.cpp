@@ -78,6 +78,7 @@ class SlowedMethod final : public SlowedQueries<Method>, public BatchAnswers {
     batch_answers(*inner_)->distance_batch(points, out);
   }
   std::map<std::string, std::string> build_options_read() const override { return inner_->build_options_read(); }
+  std::optional<nlohmann::json> build_threads_read() const override { return inner_->build_threads_read(); }
   std::unique_ptr<QueryState> new_query_state() const override {
     auto state = inner_->new_query_state();
     if (!state) return nullptr;

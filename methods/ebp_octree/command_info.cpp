@@ -7,9 +7,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "methods/ebp_octree/build_option_params.hpp"
 #include "methods/ebp_octree/commands.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/store_file.hpp"
 
 namespace bvhbench {
 
@@ -45,7 +47,8 @@ void add_info_command(CLI::App& ebp_cmd) {
     j["levels"] = h.leaf_level + 1;
     j["triangles"] = h.num_triangles;
     j["closed"] = (h.flags & ebp::kStoreClosed) != 0;
-    j["params"] = {{"leaf_factor", h.leaf_factor}, {"max_planes", h.max_planes}, {"cluster_angle", h.cluster_angle}};
+    const ebp::BuildParams built = ebp::header_build_params(h);
+    j["params"] = build_option_json(built);
     j["nodes"] = {{"total", h.nodes}, {"grey_inner", h.inner}, {"grey_leaves", h.leaves},
                   {"white", h.white}, {"black", h.black}};
     j["triangle_refs"] = h.triangle_refs;
@@ -73,7 +76,9 @@ void add_info_command(CLI::App& ebp_cmd) {
     std::printf("  frame origin      (%.17g, %.17g, %.17g)\n", h.origin[0], h.origin[1], h.origin[2]);
     std::printf("  root cube         lo (%.9g, %.9g, %.9g) in the frame, size %.9g\n", h.root_lo[0], h.root_lo[1], h.root_lo[2], h.root_size);
     std::printf("  levels            %u (leaf level %u)\n", h.leaf_level + 1, h.leaf_level);
-    std::printf("  parameters        leaf_factor=%g max_planes=%d cluster_angle=%g\n", h.leaf_factor, h.max_planes, h.cluster_angle);
+    std::printf("  parameters       ");
+    for (const ebp::BuildOption& opt : ebp::kBuildOptions) std::printf(" %s=%g", opt.name, opt.get(built));
+    std::printf("\n");
     std::printf("  nodes             %lu: %lu grey inner, %lu grey leaves, %lu white, %lu black\n",
                 (unsigned long)h.nodes, (unsigned long)h.inner, (unsigned long)h.leaves, (unsigned long)h.white,
                 (unsigned long)h.black);

@@ -8,6 +8,7 @@
 #include "harness/core/mesh.hpp"
 #include "harness/io/mesh_io.hpp"
 #include "harness/util/progress.hpp"
+#include "methods/ebp_octree/build_option_params.hpp"
 #include "methods/ebp_octree/commands.hpp"
 #include "methods/ebp_octree/ebp_method.hpp"
 
@@ -23,7 +24,7 @@ void add_stats_command(CLI::App& ebp_cmd) {
   auto o = std::make_shared<Opts>();
   auto* cmd = ebp_cmd.add_subcommand("stats", "Build the EBP-Octree on a mesh and print its figures");
   cmd->add_option("--mesh", o->mesh, "Mesh (PLY, OBJ, STL or OFF)")->required();
-  cmd->add_option("--param", o->params, "Build parameter key=value (repeatable): leaf_factor, max_planes, cluster_angle");
+  cmd->add_option("--param", o->params, "Build parameter key=value (repeatable): " + build_option_names());
   cmd->add_option("--threads", o->threads, "Build threads")->check(CLI::Range(1, 1024));
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] {

@@ -19,6 +19,8 @@
 #include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/progress.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
+#include "methods/ebp_octree/build_option_params.hpp"
 #include "methods/ebp_octree/commands.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/ebp_adapter.hpp"
@@ -27,12 +29,8 @@
 namespace bvhbench {
 
 std::vector<ParamSpec> ebp_params() {
-  return {
-      {"leaf_factor", ParamType::real, ParamRole::build, "5",
-       "leaf cell size >= leaf_factor x average edge length (the paper: 5)", {}, 0.05, 1e6},
-      {"max_planes", ParamType::integer, ParamRole::build, "8", "bounding planes per node, at most", {}, 0, 64},
-      {"cluster_angle", ParamType::real, ParamRole::build, "30",
-       "degrees: face normals closer than this share one bounding plane", {}, 0.5, 90},
+  std::vector<ParamSpec> specs = build_option_specs();
+  const std::vector<ParamSpec> query = {
       {"coherent", ParamType::boolean, ParamRole::query, "false",
        "path coherence: seed distance with the previous closest triangle, reuse the previous leaf", {}},
       {"certificate", ParamType::boolean, ParamRole::query, "true",
@@ -45,31 +43,19 @@ std::vector<ParamSpec> ebp_params() {
       {"chained_sign", ParamType::boolean, ParamRole::query, "true",
        "coherent distance on closed meshes: the previous query's sign when the probe stays within its "
        "distance of it (no inside test); same answers", {}},
-      // out of core (ooc_method.cpp, OUT_OF_CORE.md): answer from a store built by `bvhbench ebp build`
-      {"store", ParamType::text, ParamRole::build, "", "out of core: answer from this .ebp store through a page cache", {}},
-      {"cache_mb", ParamType::integer, ParamRole::query, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
-      {"cold", ParamType::boolean, ParamRole::query, "false", "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
   };
+  specs.insert(specs.end(), query.begin(), query.end());
+  const std::vector<ParamSpec> ooc = ooc_params();
+  specs.insert(specs.end(), ooc.begin(), ooc.end());
+  return specs;
 }
 
 Params resolve_build_args(const std::map<std::string, std::string>& given) {
   const std::vector<ParamSpec> specs = ebp_params();
-  std::string build;
   for (const ParamSpec& s : specs)
-    if (s.role == ParamRole::build && s.name != "store") build += (build.empty() ? "" : ", ") + s.name;
-  for (const ParamSpec& s : specs)
-    if ((s.role != ParamRole::build || s.name == "store") && given.count(s.name))
-      throw InputError("--param " + s.name + ": not a build option (build options: " + build + ")");
+    if (!is_build_option(s.name) && given.count(s.name))
+      throw InputError("--param " + s.name + ": not a build option (build options: " + build_option_names() + ")");
   return Params::resolve("ebp_octree", specs, given);
-}
-
-ebp::BuildParams build_params(const Params& p, int threads) {
-  ebp::BuildParams bp;
-  bp.leaf_factor = p.get_real("leaf_factor");
-  bp.max_planes = int(p.get_int("max_planes"));
-  bp.cluster_angle = p.get_real("cluster_angle");
-  bp.threads = threads;
-  return bp;
 }
 
 ebp::Octree build_tree(const Mesh& mesh, const ebp::BuildParams& bp, Progress* external) {
@@ -80,7 +66,7 @@ ebp::Octree build_tree(const Mesh& mesh, const ebp::BuildParams& bp, Progress* e
     prog = own.get();
   }
   try {
-    ebp::Octree t = ebp::Octree::build(mesh.vertices, mesh.triangles, bp, [&](double f) { prog->update(f); });
+    ebp::Octree t = ebp::build_octree(mesh.vertices, mesh.triangles, bp, [&](double f) { prog->update(f); });
     if (own) own->finish();
     return t;
   } catch (const std::invalid_argument& e) {
@@ -224,29 +210,12 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
-  // A store carries the build options it was made with (its header; the result records those):
-  // one given beside it would be recorded as run but never used, so it is refused. The options
-  // of the store's page cache mean nothing without one.
-  m.check = [](const Params& p) {
-    const std::string& store = p.get("store");
-    if (!store.empty()) {
-      for (const ParamSpec& s : ebp_params())
-        if (s.role == ParamRole::build && s.name != "store" && p.given(s.name))
-          throw InputError("method ebp_octree: " + s.name + "=" + p.given().at(s.name) + " given beside store=" +
-                           store + ": a store was built with its own build options (its header; `bvhbench ebp "
-                           "info` shows them), and a result records those");
-      return;
-    }
-    for (const char* ooc : {"cache_mb", "cold"})
-      if (p.given(ooc))
-        throw InputError(std::string("method ebp_octree: ") + ooc + "=" + p.given().at(ooc) +
-                         " is an option of the out-of-core store: give store=FILE.ebp with it");
-  };
+  m.check = check_ooc_options;
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells
   // apart). No store: a suite has none to give.
   m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
-    if (!p.get("store").empty()) return make_ebp_ooc_method(p);  // out of core
+    if (is_out_of_core(p)) return make_ebp_ooc_method(p);
     return std::make_unique<EbpOctreeMethod>(p);
   };
   r.add(std::move(m));

@@ -14,18 +14,16 @@
 
 namespace bvhbench {
 
-/// The method's parameters (build, coherence, and the out-of-core store's).
+/// The method's parameters: the build options (build_option_params.hpp), the query options
+/// (coherence) and the out-of-core store's (ooc_method.hpp).
 std::vector<ParamSpec> ebp_params();
 
 /// The options of `ebp build` / `ebp stats` (`--param k=v`, parsed), resolved against the
-/// method's declaration: only build options (ParamRole::build, not `store`) may be given; another
-/// is InputError "--param K: not a build option (build options: ...)".
+/// method's declaration: only build options (kBuildOptions) may be given; another option of the
+/// method is InputError "--param K: not a build option (build options: ...)".
 Params resolve_build_args(const std::map<std::string, std::string>& given);
 
-/// The build parameters among resolved method parameters `p`, with `threads` build threads.
-ebp::BuildParams build_params(const Params& p, int threads);
-
-/// Octree::build over the mesh, reporting to `external` (or, if null, to a progress line of its
+/// build_octree over the mesh, reporting to `external` (or, if null, to a progress line of its
 /// own for meshes over 200k triangles). Throws InputError naming the mesh on bad geometry.
 ebp::Octree build_tree(const Mesh& mesh, const ebp::BuildParams& bp, Progress* external);
 

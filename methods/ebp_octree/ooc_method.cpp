@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -12,11 +13,15 @@
 #include "harness/core/mesh.hpp"
 #include "harness/core/shared_structure_method.hpp"
 #include "harness/util/errors.hpp"
+#include "methods/ebp_octree/build_option_params.hpp"
 #include "methods/ebp_octree/ebp_adapter.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
+#include "methods/ebp_octree/store/store_file.hpp"
 
 namespace bvhbench {
 namespace {
+
+const char* const kStore = "store";
 
 /// One thread's queries: an ebp::OutOfCore with a page cache of its own over the shared store.
 ///
@@ -57,7 +62,7 @@ class EbpOocQueries final : public QueryState {
 class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
  public:
   explicit EbpOocMethod(const Params& p)
-      : path_(p.get("store")),
+      : path_(p.get(kStore)),
         cache_bytes_(std::size_t(p.get_int("cache_mb")) << 20),
         cold_(p.get_bool("cold")),
         coherent_(p.get_bool("coherent")),
@@ -81,16 +86,15 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
   /// The options the store was built with, from its header: what a result records as ran.
   std::map<std::string, std::string> build_options_read() const override {
     if (!store_) return {};
-    const ebp::FileHeader& h = store_->header();
-    auto real = [](double v) {
-      ParamValue x;
-      x.type = ParamType::real;
-      x.real = v;
-      return x.canonical();
-    };
-    return {{"leaf_factor", real(h.leaf_factor)},
-            {"max_planes", std::to_string(h.max_planes)},
-            {"cluster_angle", real(h.cluster_angle)}};
+    return build_option_texts(ebp::header_build_params(store_->header()));
+  }
+  /// The threads `ebp build` ran on, from the store's info section (null in a store that does
+  /// not say): a store job did not build on its own threads.
+  std::optional<nlohmann::json> build_threads_read() const override {
+    if (!store_) return std::nullopt;
+    const auto info = nlohmann::json::parse(store_->info_json(), nullptr, false);
+    if (info.is_object() && info.contains("threads") && info["threads"].is_number_integer()) return info["threads"];
+    return nlohmann::json(nullptr);
   }
   /// The pinned store and the method's own thread's cache (every further thread's cache may hold
   /// as much again, within its share of the budget).
@@ -126,6 +130,35 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
 };
 
 }  // namespace
+
+std::vector<ParamSpec> ooc_params() {
+  return {
+      {kStore, ParamType::text, ParamRole::build, "", "out of core: answer from this .ebp store through a page cache", {}},
+      {"cache_mb", ParamType::integer, ParamRole::query, "256", "out of core: page cache budget in MiB", {}, 1, 1 << 20},
+      {"cold", ParamType::boolean, ParamRole::query, "false",
+       "out of core: evict the file from the OS cache and empty the page cache before each pass", {}},
+  };
+}
+
+bool is_out_of_core(const Params& p) { return !p.get(kStore).empty(); }
+
+void check_ooc_options(const Params& p) {
+  // A store carries the build options it was made with (its header; the result records those):
+  // one given beside it would be recorded as run but never used, so it is refused. The options
+  // of the store's page cache mean nothing without one.
+  if (is_out_of_core(p)) {
+    for (const ParamSpec& s : build_option_specs())
+      if (p.given(s.name))
+        throw InputError("method ebp_octree: " + s.name + "=" + p.given().at(s.name) + " given beside store=" + p.get(kStore) +
+                         ": a store was built with its own build options (its header; `bvhbench ebp info` shows "
+                         "them), and a result records those");
+    return;
+  }
+  for (const ParamSpec& s : ooc_params())
+    if (s.name != kStore && p.given(s.name))
+      throw InputError("method ebp_octree: " + s.name + "=" + p.given().at(s.name) +
+                       " is an option of the out-of-core store: give store=FILE.ebp with it");
+}
 
 std::unique_ptr<Method> make_ebp_ooc_method(const Params& p) { return std::make_unique<EbpOocMethod>(p); }
 

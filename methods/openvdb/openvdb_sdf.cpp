@@ -319,8 +319,15 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
   void build_impl(const Mesh& mesh, const BuildContext& ctx) {
     index_.reset();
     sdf_.reset();
-    // meshToVolume builds on TBB, which the job limits to its build threads (run_job).
+    size_field(mesh, ctx);
+    make_volume(mesh, ctx);
+    publish_field();
+    start_queries();
+  }
 
+  /// The voxel size, the band widths (voxels) and the estimated stored voxel count: the voxel
+  /// asked for, coarsened until the field fits with fit=true; over the budget otherwise, InputError.
+  void size_field(const Mesh& mesh, const BuildContext& ctx) {
     const Box3d mb = mesh.bounds();
     const double diag = mb.diagonal();
     voxel_ = voxel_abs_ > 0 ? voxel_abs_ : voxel_rel_ * mesh.average_edge_length();
@@ -371,8 +378,12 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
                               ? 0.0
                               : ctx.query_bounds.extent().x * ctx.query_bounds.extent().y *
                                     ctx.query_bounds.extent().z * inv_voxel_ * inv_voxel_ * inv_voxel_;
+  }
 
-    // ---- the mesh in index space; polygon i is mesh triangle i ----
+  /// The signed distance field (and, for distance jobs with keep_index, the closest-polygon
+  /// grid) of the mesh in index space, where polygon i is mesh triangle i. meshToVolume builds on
+  /// TBB, which the job limits to its build threads (run_job).
+  void make_volume(const Mesh& mesh, const BuildContext& ctx) {
     std::vector<openvdb::Vec3s> pts(mesh.vertices.size());
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const Vec3d x = index_coords(mesh.vertices[i], origin_, inv_voxel_);
@@ -395,7 +406,10 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
     sdf_ = openvdb::tools::meshToVolume<FloatGrid>(interrupter, adapter, *xform, float(ex_vox_),
                                                   float(in_vox_), flags, index_.get());
     if (!sdf_) throw std::runtime_error("openvdb: meshToVolume returned no grid");
+  }
 
+  /// The field's values beyond its bands and its active domain, handed to the query states.
+  void publish_field() {
     exterior_value_ = double(sdf_->background());
     interior_value_ = -in_vox_ * voxel_;
     // Points outside the active box (plus the stencil) read the background: answer them without
@@ -417,7 +431,6 @@ class OpenVdbSdf final : public SharedStructureMethod<OpenVdbQueries> {
     field_.has_domain = has_domain_;
     field_.exterior_value = exterior_value_;
     field_.interior_value = interior_value_;
-    start_queries();
   }
 
   double voxel_rel_, voxel_abs_;

@@ -1,5 +1,5 @@
 #pragma once
-/// The pieces of the EBP-Octree builder that the in-memory `Octree::build` (octree_build.cpp) and the
+/// The pieces of the EBP-Octree builder that the in-memory `build_octree` (octree_build.hpp) and the
 /// external-memory build (external_build.cpp) share, so that both compute every node with the very
 /// same code: the frame (root cube, leaf level), the distribution of one triangle to leaf cells,
 /// one leaf (triangle block, planes, configuration, reference point, colouring half-edges), one

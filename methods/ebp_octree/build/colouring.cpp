@@ -72,28 +72,26 @@ std::size_t Skeleton::bytes() const {
          leaf_halves.capacity() * sizeof(LeafHalves);
 }
 
-Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
-  Colouring C;
-  const std::size_t N = sk.code.size();
-  const std::size_t nleaves = sk.leaf_node.size();
-  const int L = sk.leaf_level;
-  const std::uint32_t G = 1u << L;
-  C.ref_winding.assign(nleaves, 0);
-  const std::uint32_t OUT = std::uint32_t(N);
-  UnionFind uf(N + 1);
-  // Empty nodes touching the root's boundary are outside: the root is larger than the model's
-  // bounding box on every side.
-  for (std::size_t i = 0; i < N; ++i) {
+namespace {
+
+/// Empty nodes touching the root's boundary are outside (joined to `out`): the root is larger
+/// than the model's bounding box on every side.
+void join_boundary_to_outside(const Skeleton& sk, std::uint32_t out, UnionFind& uf) {
+  for (std::size_t i = 0; i < sk.code.size(); ++i) {
     if (sk.kind[i] != NodeKind::white) continue;
     std::uint32_t x, y, z;
     octcode_cell(sk.code[i], &x, &y, &z);
     const std::uint32_t last = (1u << octcode_level(sk.code[i])) - 1;
-    if (x == 0 || y == 0 || z == 0 || x == last || y == last || z == last) uf.unite(std::uint32_t(i), OUT, 0);
+    if (x == 0 || y == 0 || z == 0 || x == last || y == last || z == last) uf.unite(std::uint32_t(i), out, 0);
   }
-  // Adjacencies of leaves, in leaf order: w(target) - w(ref_A) from the two half-edges through the
-  // portal of the shared face (ref_A -> portal over A's triangles, portal -> ref_B over B's), or
-  // the one half-edge to the portal when the target is an empty node or the outside.
-  for (std::size_t li = 0; li < nleaves; ++li) {
+}
+
+/// Adjacencies of leaves, in leaf order: w(target) - w(ref_A) from the two half-edges through the
+/// portal of the shared face (ref_A -> portal over A's triangles, portal -> ref_B over B's), or
+/// the one half-edge to the portal when the target is an empty node or the outside (`out`).
+void join_leaf_neighbours(const Skeleton& sk, std::uint32_t out, UnionFind& uf, Colouring& C) {
+  const std::uint32_t G = 1u << sk.leaf_level;
+  for (std::size_t li = 0; li < sk.leaf_node.size(); ++li) {
     if (!sk.leaf_ref_valid[li]) continue;
     const std::uint32_t ni = sk.leaf_node[li];
     std::uint32_t c[3];
@@ -105,7 +103,7 @@ Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
       std::uint32_t target;
       bool to_leaf = false;
       if ((!pos && c[axis] == 0) || (pos && c[axis] == G - 1)) {
-        target = OUT;
+        target = out;
       } else {
         nb[axis] = pos ? c[axis] + 1 : c[axis] - 1;
         target = sk.locate_cell(nb[0], nb[1], nb[2]);
@@ -121,41 +119,55 @@ Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
       uf.unite(ni, target, ha - hb);
     }
   }
-  // Empty nodes not yet joined: probe the cells just across their faces for joined empty nodes.
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (std::size_t i = 0; i < N; ++i) {
-      if (sk.kind[i] != NodeKind::white || uf.touched[i]) continue;
-      std::uint32_t c[3];
-      octcode_cell(sk.code[i], &c[0], &c[1], &c[2]);
-      const int l = octcode_level(sk.code[i]);
-      const std::uint32_t span = 1u << (L - l);
-      bool done = false;
-      for (int dir = 0; dir < 6 && !done; ++dir) {
-        const int axis = dir >> 1;
-        const bool pos = dir & 1;
-        for (int qd = 0; qd < 4 && !done; ++qd) {
-          std::uint32_t p[3];
-          for (int k = 0; k < 3; ++k) p[k] = c[k] * span;
-          const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-          p[a1] += (qd & 1) ? (3 * span) / 4 : span / 4;
-          p[a2] += (qd & 2) ? (3 * span) / 4 : span / 4;
-          if (pos) p[axis] += span; else if (p[axis] == 0) continue; else p[axis] -= 1;
-          if (p[axis] >= G) continue;
-          const std::uint32_t k = sk.locate_cell(p[0], p[1], p[2]);
-          if (k != i && sk.kind[k] == NodeKind::white && uf.touched[k]) {
-            uf.unite(std::uint32_t(i), k, 0);
-            done = changed = true;
-          }
-        }
+}
+
+/// Empty node i not yet joined: probes the cells just across its faces for a joined empty node
+/// and joins it to the first found. Returns whether it did.
+bool join_across_faces(const Skeleton& sk, std::size_t i, UnionFind& uf) {
+  const int L = sk.leaf_level;
+  const std::uint32_t G = 1u << L;
+  std::uint32_t c[3];
+  octcode_cell(sk.code[i], &c[0], &c[1], &c[2]);
+  const std::uint32_t span = 1u << (L - octcode_level(sk.code[i]));
+  for (int dir = 0; dir < 6; ++dir) {
+    const int axis = dir >> 1;
+    const bool pos = dir & 1;
+    for (int qd = 0; qd < 4; ++qd) {
+      std::uint32_t p[3];
+      for (int k = 0; k < 3; ++k) p[k] = c[k] * span;
+      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+      p[a1] += (qd & 1) ? (3 * span) / 4 : span / 4;
+      p[a2] += (qd & 2) ? (3 * span) / 4 : span / 4;
+      if (pos) p[axis] += span; else if (p[axis] == 0) continue; else p[axis] -= 1;
+      if (p[axis] >= G) continue;
+      const std::uint32_t k = sk.locate_cell(p[0], p[1], p[2]);
+      if (k != i && sk.kind[k] == NodeKind::white && uf.touched[k]) {
+        uf.unite(std::uint32_t(i), k, 0);
+        return true;
       }
     }
   }
-  // Windings. OUT has w = 0. Components not joined to the outside (only when every edge of a
-  // region was degenerate) take the generalized winding number of one of their points (the first
-  // node of the component in node order), computed for all such components in one batch.
+  return false;
+}
+
+/// Empty nodes not yet joined, joined through their neighbours until nothing changes.
+void join_empty_nodes(const Skeleton& sk, UnionFind& uf) {
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = 0; i < sk.code.size(); ++i)
+      if (sk.kind[i] == NodeKind::white && !uf.touched[i] && join_across_faces(sk, i, uf)) changed = true;
+  }
+}
+
+/// The winding number of each component's root. OUT has w = 0. Components not joined to the
+/// outside (only when every edge of a region was degenerate) take the generalized winding number
+/// of one of their points (the first node of the component in node order), computed for all such
+/// components in one batch.
+std::vector<int> component_windings(const Frame& F, const Skeleton& sk, std::uint32_t out, UnionFind& uf,
+                                    const WindingBatch& winding_at, Colouring& C) {
+  const std::size_t N = sk.code.size();
   int pout;
-  const std::uint32_t rout = uf.find(OUT, &pout);
+  const std::uint32_t rout = uf.find(out, &pout);
   std::vector<int> comp_w(N + 1, 0);
   std::vector<std::uint8_t> comp_known(N + 1, 0);
   comp_w[rout] = -pout;  // w(root) = w(OUT) - (w(OUT) - w(root))
@@ -191,6 +203,21 @@ Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
     }
     C.colour_fallbacks = fb_pts.size();
   }
+  return comp_w;
+}
+
+}  // namespace
+
+Colouring colour(const Frame& F, Skeleton& sk, const WindingBatch& winding_at) {
+  Colouring C;
+  const std::size_t N = sk.code.size();
+  C.ref_winding.assign(sk.leaf_node.size(), 0);
+  const std::uint32_t OUT = std::uint32_t(N);
+  UnionFind uf(N + 1);
+  join_boundary_to_outside(sk, OUT, uf);
+  join_leaf_neighbours(sk, OUT, uf, C);
+  join_empty_nodes(sk, uf);
+  const std::vector<int> comp_w = component_windings(F, sk, OUT, uf, winding_at, C);
   for (std::size_t i = 0; i < N; ++i) {
     if (sk.kind[i] == NodeKind::white) {
       int pot;

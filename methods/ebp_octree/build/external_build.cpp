@@ -214,182 +214,212 @@ void distribute_to_runs(TriangleSource& src, const BuildContext& ctx, tbb::task_
   R.runs = runs.empty() ? 1 : runs.size();
 }
 
-/// The merge and the assembly (phase 3): the sorted records merged (a heap over the run readers,
-/// or the run in memory), each leaf cell's records built into a leaf (build_leaf, in parallel
-/// batches), the batches handed to the assembler in a second thread (inner nodes, the cut, the
-/// pages written as their subtrees complete), at most 3 batches alive.
-void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_arena& arena,
-                        const ExtBuildOptions& opt, std::size_t avail, ExtBuildReport& R, SortedRecords& sorted,
-                        Assembler& as) {
-  auto progress = [&](const char* phase, double f) {
-    if (opt.progress) opt.progress(phase, f);
-  };
-  auto check = [&] {
-    if (opt.check) opt.check();
-  };
-  const int threads = std::max(1, opt.params.threads);
-  const int L = ctx.f.leaf_level;
-  std::vector<RunFile>& runs = sorted.runs;
-  std::vector<Rec>& run = sorted.run;
-  std::vector<std::unique_ptr<RunReader>> readers;
-  const std::size_t merge_bytes = avail / 4;
-  for (const RunFile& rf : runs)
-    readers.push_back(std::make_unique<RunReader>(rf, merge_bytes / std::max<std::size_t>(1, runs.size()) / sizeof(Rec)));
+/// The sorted records in order: a heap over the spilled runs' readers (their buffers sharing
+/// `merge_bytes`), or the one run kept in memory.
+class RecordMerge {
+ public:
+  RecordMerge(SortedRecords& sorted, std::size_t merge_bytes) : sorted_(sorted) {
+    const std::vector<RunFile>& runs = sorted.runs;
+    for (const RunFile& rf : runs)
+      readers_.push_back(std::make_unique<RunReader>(rf, merge_bytes / std::max<std::size_t>(1, runs.size()) / sizeof(Rec)));
+    for (std::uint32_t i = 0; i < readers_.size(); ++i)
+      if (const Rec* r = readers_[i]->peek()) heap_.push({r->m, r->t, i});
+  }
+  /// The next record into *out; false at the end.
+  bool next(Rec* out) {
+    if (sorted_.runs.empty()) {
+      if (mem_pos_ == sorted_.run.size()) return false;
+      *out = sorted_.run[mem_pos_++];
+      return true;
+    }
+    if (heap_.empty()) return false;
+    const HeapEnt h = heap_.top();
+    heap_.pop();
+    *out = *readers_[h.run]->peek();
+    readers_[h.run]->pop();
+    if (const Rec* r = readers_[h.run]->peek()) heap_.push({r->m, r->t, h.run});
+    return true;
+  }
+
+ private:
   struct HeapEnt {
     std::uint64_t m;
     std::uint32_t t, run;
     bool operator>(const HeapEnt& o) const { return m > o.m || (m == o.m && t > o.t); }
   };
-  std::priority_queue<HeapEnt, std::vector<HeapEnt>, std::greater<HeapEnt>> heap;
-  for (std::uint32_t i = 0; i < readers.size(); ++i)
-    if (const Rec* r = readers[i]->peek()) heap.push({r->m, r->t, i});
-  std::size_t mem_pos = 0;
-  auto next = [&](Rec* out_rec) -> bool {
-    if (runs.empty()) {
-      if (mem_pos == run.size()) return false;
-      *out_rec = run[mem_pos++];
-      return true;
+  SortedRecords& sorted_;
+  std::vector<std::unique_ptr<RunReader>> readers_;
+  std::priority_queue<HeapEnt, std::vector<HeapEnt>, std::greater<HeapEnt>> heap_;
+  std::size_t mem_pos_ = 0;
+};
+
+/// One batch of built leaves, in Morton order, for the assembler.
+struct BuiltLeaves {
+  std::vector<std::uint64_t> m;
+  std::vector<Node> nodes;
+  std::vector<Leaf> leaves;
+  std::vector<std::vector<LeafTri>> blocks;
+  std::vector<NodeTmp> tmps;
+  std::vector<LeafHalves> halves;
+};
+
+/// A batch of records (leaf cells starting at `starts`, which ends with the batch's size) built
+/// into leaves, in parallel when threads > 1. The coordinates are gathered from the source in one
+/// call before the parallel builds: a paged source serves one caller at a time.
+BuiltLeaves build_batch(TriangleSource& src, const BuildContext& ctx, tbb::task_arena& arena, int threads,
+                        const std::vector<Rec>& batch, const std::vector<std::size_t>& starts) {
+  const std::size_t nl = starts.size() - 1;
+  BuiltLeaves bt;
+  bt.m.resize(nl);
+  bt.nodes.resize(nl);
+  bt.leaves.resize(nl);
+  bt.blocks.resize(nl);
+  bt.tmps.resize(nl);
+  bt.halves.resize(nl);
+  std::vector<std::uint32_t> batch_vertices(3 * batch.size());
+  std::vector<float> batch_xyz(9 * batch.size());
+  for (std::size_t k = 0; k < batch.size(); ++k) std::memcpy(&batch_vertices[3 * k], batch[k].v, sizeof batch[k].v);
+  src.gather_vertices(batch_vertices.data(), batch_vertices.size(), batch_xyz.data());
+  auto one = [&](std::size_t i) {
+    const std::size_t b = starts[i], e = starts[i + 1];
+    std::vector<std::uint32_t> tri(e - b);
+    for (std::size_t k = b; k < e; ++k) tri[k - b] = batch[k].t;
+    bt.blocks[i].resize(e - b);
+    bt.m[i] = batch[b].m;
+    const Octcode code = octcode_make(ctx.f.leaf_level, batch[b].m);
+    build_leaf(ctx, code, e - b, tri.data(), &batch_xyz[9 * b], &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
+               &bt.tmps[i], &bt.halves[i]);
+  };
+  if (threads <= 1 || nl < 2) {
+    for (std::size_t i = 0; i < nl; ++i) one(i);
+  } else {
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
+      });
+    });
+  }
+  return bt;
+}
+
+/// The assembler on a thread of its own, fed built batches through a queue of one: at most 3
+/// batches alive (being built, queued, being assembled). Its error, if any, is kept for rethrow().
+class AssemblerThread {
+ public:
+  explicit AssemblerThread(Assembler& as) : as_(as), thread_([this] { run(); }) {}
+  /// Queues a batch, waiting while one is queued; false if the assembler has failed.
+  bool push(BuiltLeaves&& bt) {
+    {
+      std::unique_lock<std::mutex> lk(mu_);
+      cv_.wait(lk, [&] { return queue_.empty() || failed_; });
+      if (failed_) return false;
+      queue_.push_back(std::move(bt));
     }
-    if (heap.empty()) return false;
-    const HeapEnt h = heap.top();
-    heap.pop();
-    *out_rec = *readers[h.run]->peek();
-    readers[h.run]->pop();
-    if (const Rec* r = readers[h.run]->peek()) heap.push({r->m, r->t, h.run});
+    cv_.notify_all();
     return true;
-  };
-  // Leaves are built in batches (in parallel); a second thread feeds the built batches to the
-  // assembler (inner nodes, the cut, page writes) while the next batch is being built: at most
-  // 3 batches alive (built, queued, assembling), each ≈ avail/12.
-  // A batch's records, their coordinates (gathered from the source in one call, before the
-  // parallel leaf builds: a paged source serves one caller at a time) and its leaves' triangles.
-  const std::size_t batch_cap =
-      std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + 12 + 36 + sizeof(LeafTri) + 64));
-  struct Built {
-    std::vector<std::uint64_t> m;
-    std::vector<Node> nodes;
-    std::vector<Leaf> leaves;
-    std::vector<std::vector<LeafTri>> blocks;
-    std::vector<NodeTmp> tmps;
-    std::vector<LeafHalves> halves;
-  };
-  std::mutex mu;
-  std::condition_variable cv;
-  std::deque<Built> queue;
-  bool closing = false, failed = false;
-  std::exception_ptr asm_err;
-  std::thread assembler([&] {
+  }
+  bool failed() {
+    std::lock_guard<std::mutex> lk(mu_);
+    return failed_;
+  }
+  /// After a failure on the feeding side: nothing more is assembled, nor finished.
+  void abandon() {
+    std::lock_guard<std::mutex> lk(mu_);
+    failed_ = true;
+    queue_.clear();
+  }
+  /// Lets the queue drain (the assembly finished unless failed) and joins the thread.
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lk(mu_);
+      closing_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  void rethrow() const {
+    if (err_) std::rethrow_exception(err_);
+  }
+
+ private:
+  void run() {
     try {
       for (;;) {
-        Built bt;
+        BuiltLeaves bt;
         {
-          std::unique_lock<std::mutex> lk(mu);
-          cv.wait(lk, [&] { return !queue.empty() || closing; });
-          if (queue.empty()) break;
-          bt = std::move(queue.front());
-          queue.pop_front();
+          std::unique_lock<std::mutex> lk(mu_);
+          cv_.wait(lk, [&] { return !queue_.empty() || closing_; });
+          if (queue_.empty()) break;
+          bt = std::move(queue_.front());
+          queue_.pop_front();
         }
-        cv.notify_all();
+        cv_.notify_all();
         for (std::size_t i = 0; i < bt.m.size(); ++i)
-          as.add_leaf(bt.m[i], bt.nodes[i], bt.leaves[i], std::move(bt.blocks[i]), std::move(bt.tmps[i]), bt.halves[i]);
+          as_.add_leaf(bt.m[i], bt.nodes[i], bt.leaves[i], std::move(bt.blocks[i]), std::move(bt.tmps[i]), bt.halves[i]);
       }
-      bool f;
-      {
-        std::lock_guard<std::mutex> lk(mu);
-        f = failed;
-      }
-      if (!f) as.finish();
+      if (!failed()) as_.finish();
     } catch (...) {
-      std::lock_guard<std::mutex> lk(mu);
-      asm_err = std::current_exception();
-      failed = true;
+      std::lock_guard<std::mutex> lk(mu_);
+      err_ = std::current_exception();
+      failed_ = true;
     }
-    cv.notify_all();
-  });
-  auto stop_assembler = [&] {
-    {
-      std::lock_guard<std::mutex> lk(mu);
-      closing = true;
-    }
-    cv.notify_all();
-    assembler.join();
-  };
+    cv_.notify_all();
+  }
+  Assembler& as_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<BuiltLeaves> queue_;
+  bool closing_ = false, failed_ = false;
+  std::exception_ptr err_;
+  std::thread thread_;  // last: starts once everything above exists
+};
+
+/// The merge and the assembly (phase 3): the sorted records merged, each leaf cell's records
+/// built into a leaf (build_leaf, in parallel batches of ≈ avail/12), the batches handed to the
+/// assembler's thread (inner nodes, the cut, the pages written as their subtrees complete).
+void merge_and_assemble(TriangleSource& src, const BuildContext& ctx, tbb::task_arena& arena,
+                        const ExtBuildOptions& opt, std::size_t avail, ExtBuildReport& R, SortedRecords& sorted,
+                        Assembler& as) {
+  const int threads = std::max(1, opt.params.threads);
+  RecordMerge merge(sorted, avail / 4);
+  // A batch's records, their coordinates and its leaves' triangles.
+  const std::size_t batch_cap =
+      std::max<std::size_t>(4096, (avail / 12) / (sizeof(Rec) + 12 + 36 + sizeof(LeafTri) + 64));
+  AssemblerThread assembler(as);
   try {
     std::vector<Rec> batch;
-    std::vector<std::uint32_t> batch_vertices;
-    std::vector<float> batch_xyz;
-    std::vector<std::size_t> starts;
+    std::vector<std::size_t> starts;  // the batch's leaf cells
     std::uint64_t consumed = 0;
     auto process = [&] {
-      const std::size_t nl = starts.size();
       starts.push_back(batch.size());
-      Built bt;
-      bt.m.resize(nl);
-      bt.nodes.resize(nl);
-      bt.leaves.resize(nl);
-      bt.blocks.resize(nl);
-      bt.tmps.resize(nl);
-      bt.halves.resize(nl);
-      batch_vertices.resize(3 * batch.size());
-      batch_xyz.resize(9 * batch.size());
-      for (std::size_t k = 0; k < batch.size(); ++k) std::memcpy(&batch_vertices[3 * k], batch[k].v, sizeof batch[k].v);
-      src.gather_vertices(batch_vertices.data(), batch_vertices.size(), batch_xyz.data());
-      auto one = [&](std::size_t i) {
-        const std::size_t b = starts[i], e = starts[i + 1];
-        std::vector<std::uint32_t> tri(e - b);
-        for (std::size_t k = b; k < e; ++k) tri[k - b] = batch[k].t;
-        bt.blocks[i].resize(e - b);
-        bt.m[i] = batch[b].m;
-        const Octcode code = octcode_make(L, batch[b].m);
-        build_leaf(ctx, code, e - b, tri.data(), &batch_xyz[9 * b], &bt.nodes[i], &bt.leaves[i], bt.blocks[i].data(),
-                   &bt.tmps[i], &bt.halves[i]);
-      };
-      if (threads <= 1 || nl < 2) {
-        for (std::size_t i = 0; i < nl; ++i) one(i);
-      } else {
-        arena.execute([&] {
-          tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) one(i);
-          });
-        });
-      }
-      {
-        std::unique_lock<std::mutex> lk(mu);
-        cv.wait(lk, [&] { return queue.size() < 1 || failed; });
-        if (failed) return;
-        queue.push_back(std::move(bt));
-      }
-      cv.notify_all();
+      if (!assembler.push(build_batch(src, ctx, arena, threads, batch, starts))) return;
       consumed += batch.size();
       batch.clear();
       starts.clear();
-      check();
-      progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
+      if (opt.check) opt.check();
+      if (opt.progress)
+        opt.progress("building", 0.35 + 0.6 * double(consumed) / double(std::max<std::uint64_t>(1, R.records)));
     };
     Rec r;
-    while (next(&r)) {
+    while (merge.next(&r)) {
       if (batch.empty() || batch.back().m != r.m) {
         if (batch.size() >= batch_cap) {
           process();
-          if (failed) break;
+          if (assembler.failed()) break;
         }
         starts.push_back(batch.size());
       }
       batch.push_back(r);
     }
-    if (!batch.empty() && !failed) process();
-    std::vector<Rec>().swap(run);
+    if (!batch.empty() && !assembler.failed()) process();
+    std::vector<Rec>().swap(sorted.run);
   } catch (...) {
-    {
-      std::lock_guard<std::mutex> lk(mu);
-      failed = true;
-      queue.clear();
-    }
-    stop_assembler();
+    assembler.abandon();
+    assembler.stop();
     throw;
   }
-  stop_assembler();
-  if (asm_err) std::rethrow_exception(asm_err);
+  assembler.stop();
+  assembler.rethrow();
 }
 
 /// Writes the colouring into the pages (phase 4): the kind byte of each empty node found black,
@@ -440,72 +470,32 @@ void patch_colouring(bvhbench::AtomicOutputFile& out, Assembler& as, const Colou
   }
 }
 
-}  // namespace
-
-ExtBuildReport build_store_external(TriangleSource& src, const std::string& path, const ExtBuildOptions& opt) {
-  const auto t_start = Clock::now();
-  ExtBuildReport R;
-  const BuildParams& prm = opt.params;
-  const int threads = std::max(1, prm.threads);
-  auto progress = [&](const char* phase, double f) {
-    if (opt.progress) opt.progress(phase, f);
-  };
-  auto check = [&] {
-    if (opt.check) opt.check();
-  };
-  tbb::task_arena arena(threads);
-
-  // ---- 1. frame (streaming): bounding box, average edge, closedness, sha256 ----
-  auto t0 = Clock::now();
-  const FrameScan scan = scan_frame(src, arena, opt);
-  const FrameAccumulator& acc = scan.acc;
-  const std::uint64_t nt = acc.triangles;
-  if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
-  if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
-  R.closed = scan.closed;
-  const Frame F = compute_frame(acc, prm);
-  const BuildContext ctx(F, prm);
-  const int L = F.leaf_level;
-  R.seconds_frame = since(t0);
-  progress("frame", 0.05);
-
-  // Memory plan: the source's resident bytes and a fixed reserve come first; the rest goes to the
-  // sort runs (phase 2), then to the merge buffers and the leaf batches (phase 3).
+/// How the memory budget is shared (opt.memory_budget): the source's resident bytes and a fixed
+/// reserve come first; the rest, `avail`, goes to the sort runs (phase 2), then to the merge
+/// buffers and the leaf batches (phase 3).
+struct MemoryPlan {
+  std::size_t avail = 0;
+  std::size_t run_cap = 0;  ///< records per sorted run
+};
+MemoryPlan plan_memory(const TriangleSource& src, std::uint64_t nt, const ExtBuildOptions& opt, ExtBuildReport& R) {
   // Also set aside what grows with the model and is kept to the end: the node skeleton, the
   // union-find, the top tree and the patch list, ≈ 2.2 B per triangle measured on the 32M
-  // models (at the default leaf_factor); 3 B per triangle is reserved.
+  // models (at the default build options); 3 B per triangle is reserved.
   const std::size_t reserve = (std::size_t(48) << 20) + std::size_t(3 * nt);
   const std::size_t resident = src.resident_bytes();
   R.min_budget_bytes = resident + reserve + (std::size_t(8) << 20);
-  std::size_t avail = opt.memory_budget > resident + reserve ? opt.memory_budget - resident - reserve : 0;
-  avail = std::max<std::size_t>(avail, std::size_t(8) << 20);
-  std::size_t run_cap = (opt.run_bytes ? opt.run_bytes : avail / 2) / sizeof(Rec);
-  run_cap = std::max<std::size_t>(run_cap, 64);
-  R.run_capacity_records = run_cap;
+  MemoryPlan plan;
+  plan.avail = opt.memory_budget > resident + reserve ? opt.memory_budget - resident - reserve : 0;
+  plan.avail = std::max<std::size_t>(plan.avail, std::size_t(8) << 20);
+  plan.run_cap = (opt.run_bytes ? opt.run_bytes : plan.avail / 2) / sizeof(Rec);
+  plan.run_cap = std::max<std::size_t>(plan.run_cap, 64);
+  R.run_capacity_records = plan.run_cap;
+  return plan;
+}
 
-  // ---- 2. distribution into sorted runs ----
-  t0 = Clock::now();
-  SortedRecords sorted;
-  distribute_to_runs(src, ctx, arena, opt, nt, run_cap, R, sorted);
-  TempFiles& run_files = sorted.files;
-  R.seconds_distribute = since(t0);
-  check();
-
-  // ---- 3. merge; leaves in batches (parallel), inner nodes and pages as subtrees complete ----
-  t0 = Clock::now();
-  bvhbench::AtomicOutputFile out(path);  // a temporary beside path until committed, removed on failure
-  Assembler as(ctx, opt, out, kPageAlign);
-  merge_and_assemble(src, ctx, arena, opt, avail, R, sorted, as);
-  R.seconds_merge_build = since(t0);
-  // The runs are no longer needed.
-  for (const std::string& p : run_files.paths) ::unlink(p.c_str());
-  run_files.paths.clear();
-
-  // ---- 4. colouring over the skeleton, patched into the pages and the top tree ----
-  t0 = Clock::now();
-  progress("colouring", 0.95);
-  Skeleton& sk = as.sk;
-  R.skeleton_bytes = sk.bytes();
+/// The colouring over the assembler's skeleton (phase 4); the winding-number fallback rescans
+/// the source. Returns, per node, whether it is an empty node found black.
+std::vector<std::uint8_t> colour_skeleton(TriangleSource& src, const Frame& F, Assembler& as, Colouring* C) {
   auto winding_at = [&](const std::vector<Vec3d>& pts) {
     std::vector<double> w(pts.size(), 0.0);
     src.scan([&](std::uint64_t, std::size_t n, const std::uint32_t*, const float* xyz) {
@@ -519,11 +509,14 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     for (double x : w) out.push_back(int(std::lround(x)));
     return out;
   };
-  const Colouring C = colour(F, sk, winding_at);
-  const std::size_t N = sk.code.size();
-  std::vector<std::uint8_t> is_black(N, 0);
-  for (std::uint32_t i : C.black) is_black[i] = 1;
-  patch_colouring(out, as, C, is_black);
+  *C = colour(F, as.sk, winding_at);
+  std::vector<std::uint8_t> is_black(as.sk.code.size(), 0);
+  for (std::uint32_t i : C->black) is_black[i] = 1;
+  return is_black;
+}
+
+/// The top tree's black nodes, and its planes gathered in top-node order (the section's content).
+std::vector<Plane> finish_top_tree(Assembler& as, const std::vector<std::uint8_t>& is_black) {
   for (std::size_t k = 0; k < as.top.size(); ++k)
     if (as.top[k].kind == TopKind::white && is_black[as.top_gid[k]]) as.top[k].kind = TopKind::black;
   std::vector<Plane> top_planes;
@@ -533,31 +526,36 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
     top_planes.insert(top_planes.end(), as.top_plane_pool.begin() + as.top_plane_ref[k].first,
                       as.top_plane_pool.begin() + as.top_plane_ref[k].first + as.top_plane_ref[k].second);
   }
-  R.seconds_colour = since(t0);
+  return top_planes;
+}
 
-  // ---- 5. stats, the sections after the pages, the header ----
+/// The whole tree's figures (the assembler counted the grey nodes as it went).
+void complete_stats(const Frame& F, const BuildContext& ctx, std::uint64_t nt, const Colouring& C,
+                    const std::vector<std::uint8_t>& is_black, Assembler& as, const ExtBuildReport& R) {
   Stats& S = as.stats;
-  S.leaf_level = L;
+  S.leaf_level = F.leaf_level;
   S.root_size = F.root_size;
   S.leaf_size = ctx.cs;
   S.average_edge = F.average_edge;
   S.triangles = nt;
-  S.nodes = N;
+  S.nodes = as.sk.code.size();
   S.planes = as.planes_total_;
   S.colour_fallbacks = C.colour_fallbacks;
   S.degenerate_edges = C.degenerate_edges;
   S.invalid_refs = C.invalid_refs;
-  for (std::size_t i = 0; i < N; ++i)
-    if (sk.kind[i] == NodeKind::white) ++(is_black[i] ? S.black : S.white);
+  for (std::size_t i = 0; i < S.nodes; ++i)
+    if (as.sk.kind[i] == NodeKind::white) ++(is_black[i] ? S.black : S.white);
   S.seconds_distribute = R.seconds_distribute;
   S.seconds_colour = R.seconds_colour;
-  S.build_seconds = since(t_start);
-  R.stats = S;
-  R.pages = as.dir.size();
-  R.top_nodes = as.top.size();
+}
 
-  FileHeader h = new_file_header(src.origin(), F.root_lo, F.root_size, L, std::uint32_t(nt), prm, opt.page_target, R.closed);
-  h.nodes = N;
+/// The sections after the pages (directory, top tree, info) and the header, written last.
+void write_tail(bvhbench::AtomicOutputFile& out, TriangleSource& src, const Frame& F, const ExtBuildOptions& opt,
+                Assembler& as, const std::vector<Plane>& top_planes, ExtBuildReport& R) {
+  const Stats& S = R.stats;
+  FileHeader h = new_file_header(src.origin(), F.root_lo, F.root_size, F.leaf_level, std::uint32_t(S.triangles),
+                                 opt.params, opt.page_target, R.closed);
+  h.nodes = S.nodes;
   h.inner = S.inner;
   h.leaves = S.leaves;
   h.white = S.white;
@@ -582,6 +580,68 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   h.file_size = h.info.offset + h.info.size;
   write_header(out, h);
   R.file_bytes = h.file_size;
+}
+
+}  // namespace
+
+ExtBuildReport build_store_external(TriangleSource& src, const std::string& path, const ExtBuildOptions& opt) {
+  const auto t_start = Clock::now();
+  ExtBuildReport R;
+  auto progress = [&](const char* phase, double f) {
+    if (opt.progress) opt.progress(phase, f);
+  };
+  auto check = [&] {
+    if (opt.check) opt.check();
+  };
+  tbb::task_arena arena(std::max(1, opt.params.threads));
+
+  // ---- 1. frame (streaming): bounding box, average edge, closedness, sha256 ----
+  auto t0 = Clock::now();
+  const FrameScan scan = scan_frame(src, arena, opt);
+  const std::uint64_t nt = scan.acc.triangles;
+  if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
+  if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
+  R.closed = scan.closed;
+  const Frame F = compute_frame(scan.acc, opt.params);
+  const BuildContext ctx(F, opt.params);
+  R.seconds_frame = since(t0);
+  progress("frame", 0.05);
+  const MemoryPlan plan = plan_memory(src, nt, opt, R);
+
+  // ---- 2. distribution into sorted runs ----
+  t0 = Clock::now();
+  SortedRecords sorted;
+  distribute_to_runs(src, ctx, arena, opt, nt, plan.run_cap, R, sorted);
+  R.seconds_distribute = since(t0);
+  check();
+
+  // ---- 3. merge; leaves in batches (parallel), inner nodes and pages as subtrees complete ----
+  t0 = Clock::now();
+  bvhbench::AtomicOutputFile out(path);  // a temporary beside path until committed, removed on failure
+  Assembler as(ctx, opt, out, kPageAlign);
+  merge_and_assemble(src, ctx, arena, opt, plan.avail, R, sorted, as);
+  R.seconds_merge_build = since(t0);
+  // The runs are no longer needed.
+  for (const std::string& p : sorted.files.paths) ::unlink(p.c_str());
+  sorted.files.paths.clear();
+
+  // ---- 4. colouring over the skeleton, patched into the pages and the top tree ----
+  t0 = Clock::now();
+  progress("colouring", 0.95);
+  R.skeleton_bytes = as.sk.bytes();
+  Colouring C;
+  const std::vector<std::uint8_t> is_black = colour_skeleton(src, F, as, &C);
+  patch_colouring(out, as, C, is_black);
+  const std::vector<Plane> top_planes = finish_top_tree(as, is_black);
+  R.seconds_colour = since(t0);
+
+  // ---- 5. stats, the sections after the pages, the header ----
+  complete_stats(F, ctx, nt, C, is_black, as, R);
+  as.stats.build_seconds = since(t_start);
+  R.stats = as.stats;
+  R.pages = as.dir.size();
+  R.top_nodes = as.top.size();
+  write_tail(out, src, F, opt, as, top_planes, R);
   check();
   out.commit_durable();
   R.seconds_total = since(t_start);

@@ -5,7 +5,7 @@
 /// and inner nodes are built in octcode order from the merged stream with the in-memory builder's
 /// own code (ebp_build_parts.hpp) and written page by page as subtrees complete; the colouring runs
 /// over the node skeleton at the end and is patched into the pages (checksums updated). The
-/// store is the one `write_store(Octree::build(...))` writes: same pages, byte for byte.
+/// store is the one `write_store(build_octree(...))` writes: same pages, byte for byte.
 #include <cstdint>
 #include <functional>
 #include <memory>

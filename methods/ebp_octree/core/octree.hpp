@@ -116,14 +116,6 @@ static_assert(sizeof(SubRef) == 16, "SubRef is 16 bytes");
 
 class Octree {
  public:
-  /// Builds over `vertices` (#V) and `triangles` (#F, indices into vertices). Triangles may be
-  /// degenerate or repeated; #F >= 1. Throws std::invalid_argument on an index out of range or a
-  /// non-finite coordinate. `progress` (optional) receives fractions in [0, 1].
-  static Octree build(const std::vector<Vec3d>& vertices,
-                      const std::vector<std::array<std::uint32_t, 3>>& triangles,
-                      const BuildParams& params,
-                      const std::function<void(double)>& progress = nullptr);
-
   // --- the structure (read-only after build) ---
   /// The frame origin (world = frame + origin); every other coordinate here is in the frame.
   Vec3d origin{0, 0, 0};

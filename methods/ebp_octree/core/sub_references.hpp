@@ -12,7 +12,7 @@ namespace ebp {
 
 /// Recomputes tree.sub_refs and tree.sub_sides from the leaves, their triangles and their
 /// reference points' winding numbers (empty when the tree is not closed). Needs the leaf blocks
-/// (compute_leaf_blocks) first. Called where a whole tree is built or loaded (Octree::build,
+/// (compute_leaf_blocks) first. Called where a whole tree is built or loaded (build_octree,
 /// StoreReader::load_all); a page of the store is decoded without them (page_codec.cpp): it is
 /// decoded while a query waits, and the answers are the same without.
 void compute_sub_references(Octree& tree);

@@ -54,8 +54,10 @@ struct FileHeader {
   double root_size;
   std::uint32_t leaf_level;
   std::uint32_t num_triangles;  ///< of the input mesh
-  double leaf_factor, cluster_angle;
-  std::int32_t max_planes;
+  /// The build options, each in the slot its entry of kBuildOptions names (core/build_params.hpp;
+  /// store_file.hpp reads and writes them).
+  double build_reals[2];
+  std::int32_t build_ints[1];
   std::uint32_t page_target;  ///< bytes: the packing target of the writer
   std::uint64_t nodes, inner, leaves, white, black, triangle_refs, planes;  ///< of the whole tree
   std::uint64_t num_pages, num_top_nodes, num_top_children, num_top_planes;

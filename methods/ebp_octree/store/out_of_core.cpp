@@ -35,7 +35,7 @@ OutOfCore::OutOfCore(std::shared_ptr<const StoreReader> store, std::size_t cache
   origin_ = Vec3d(h.origin[0], h.origin[1], h.origin[2]);
   root_lo_ = Vec3d(h.root_lo[0], h.root_lo[1], h.root_lo[2]);
   root_size_ = h.root_size;
-  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;  // as Octree::build computes it
+  root_centre_ = root_lo_ + Vec3d(0.5, 0.5, 0.5) * root_size_;  // as build_octree computes it
   leaf_level_ = int(h.leaf_level);
   page_stamp_.assign(store_->directory().size(), 0);
   if (cold_) store_->drop_os_cache();
@@ -234,6 +234,23 @@ void OutOfCore::prefetch_pages(const Vec3d& p, double best, std::uint64_t qid) {
   }
 }
 
+std::uint32_t OutOfCore::narrowed_start(const Vec3d& p, double best, Vec3d* start_lo, int* start_level) {
+  const double r = best + search_tol(p, root_lo_, root_size_);
+  std::uint32_t start = 0;
+  while (top_[start].kind == TopKind::inner) {
+    const double csz = root_size_ / double(std::uint64_t(1) << (*start_level + 1));
+    const int o = child_octant(p, *start_lo, csz);
+    const Vec3d clo = child_corner(*start_lo, csz, o);
+    const std::uint32_t ci = top_children_[top_[start].index + std::uint32_t(o)];
+    if (!cell_holds_ball(clo, csz, p, r) || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
+    ++top_counters_.nodes_visited;
+    start = ci;
+    *start_lo = clo;
+    ++*start_level;
+  }
+  return start;
+}
+
 void OutOfCore::search(const Vec3d& p, Best& bst) {
   const std::uint64_t qid = ++query_id_;
   bool prefetched = false;
@@ -266,28 +283,11 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     return bound(nd, top_planes_, lo, size);
   };
 
-  // The narrowed start (as the in-memory search's): with a finite best (the previous page's
-  // search), the deepest top node on p's path whose cell holds the ball (p, best + tol)
-  // strictly inside: all geometry outside that cell is strictly farther than the best (a
-  // triangle crossing into the cell is listed in the cell's own leaves too), so nothing it
-  // could win is lost, and the top tree's upper levels are not walked on every query.
-  std::uint32_t start = 0;
   Vec3d start_lo = root_lo_;
   int start_level = 0;
-  if (bst.b.best < std::numeric_limits<double>::infinity()) {
-    const double r = bst.b.best + search_tol(p, root_lo_, root_size_);
-    while (top_[start].kind == TopKind::inner) {
-      const double csz = root_size_ / double(std::uint64_t(1) << (start_level + 1));
-      const int o = child_octant(p, start_lo, csz);
-      const Vec3d clo = child_corner(start_lo, csz, o);
-      const std::uint32_t ci = top_children_[top_[start].index + std::uint32_t(o)];
-      if (!cell_holds_ball(clo, csz, p, r) || (top_[ci].kind != TopKind::inner && top_[ci].kind != TopKind::page)) break;
-      ++top_counters_.nodes_visited;
-      start = ci;
-      start_lo = clo;
-      ++start_level;
-    }
-  }
+  const std::uint32_t start = bst.b.best < std::numeric_limits<double>::infinity()
+                                  ? narrowed_start(p, bst.b.best, &start_lo, &start_level)
+                                  : 0;
   TopItem stack[8 * (kMaxLevel + 2)];
   int sp = 0;
   stack[sp++] = {start_lo, lower_bound(top_[start], start_lo, root_size_ / double(std::uint64_t(1) << start_level)),

@@ -74,6 +74,13 @@ class OutOfCore {
   void page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d& p, Best& b);
   /// The branch and bound over the top tree and the pages, from the running best in `b`.
   void search(const Vec3d& p, Best& b);
+  /// The narrowed start (as the in-memory search's): with a finite best (the previous page's
+  /// search), the deepest top node on p's path whose cell holds the ball (p, best + tol) strictly
+  /// inside: all geometry outside that cell is strictly farther than the best (a triangle
+  /// crossing into the cell is listed in the cell's own leaves too), so nothing it could win is
+  /// lost, and the top tree's upper levels are not walked on every query. Its corner and level
+  /// in *start_lo and *start_level (the root's on entry).
+  std::uint32_t narrowed_start(const Vec3d& p, double best, Vec3d* start_lo, int* start_level);
   /// Before the first page a search must read: the pages it could still visit (top-tree bound
   /// within `best`), up to kPrefetchPages nearest first, that are not resident, asked of the OS
   /// at once (StoreReader::will_need), so that their reads overlap instead of following one

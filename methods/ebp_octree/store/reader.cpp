@@ -94,6 +94,14 @@ std::size_t StoreReader::pinned_bytes() const {
 }
 
 void StoreReader::open_and_check() {
+  check_header();
+  check_sections();
+  load_sections();
+  const std::vector<std::uint8_t> page_seen = check_top_tree();
+  check_directory(page_seen);
+}
+
+void StoreReader::check_header() {
   if (file_size_ < sizeof(FileHeader))
     fail("truncated: " + std::to_string(file_size_) + " bytes, smaller than the 512-byte header");
   read_at(0, &h_, sizeof h_);
@@ -122,6 +130,9 @@ void StoreReader::open_and_check() {
   if (h_.num_triangles == 0) fail("no triangles");
   if (h_.flags & ~kStoreClosed) fail("unknown header flags");
   if (h_.num_pages == 0 || h_.num_pages > 0xffffffffull) fail("bad page count " + std::to_string(h_.num_pages));
+}
+
+void StoreReader::check_sections() const {
   struct Named { const char* name; const Section* s; std::uint64_t expect; };
   const Named secs[] = {
       {"top nodes", &h_.top_nodes, h_.num_top_nodes * sizeof(TopNode)},
@@ -150,6 +161,9 @@ void StoreReader::open_and_check() {
   if (h_.info.size > (64u << 20)) fail("info section larger than 64 MiB");
   if (h_.num_top_nodes == 0) fail("empty top tree");
 
+}
+
+void StoreReader::load_sections() {
   auto load = [&](const Section& s, void* dst, const char* name) {
     read_at(s.offset, dst, std::size_t(s.size));
     if (opt_.verify_checksums && crc32c(dst, std::size_t(s.size)) != s.crc)
@@ -166,6 +180,9 @@ void StoreReader::open_and_check() {
   load(h_.info, info_.data(), "info");
   load(h_.directory, dir_.data(), "directory");
 
+}
+
+std::vector<std::uint8_t> StoreReader::check_top_tree() {
   // Top planes finite.
   for (const Plane& p : top_planes_)
     if (!finite3(p.n) || !std::isfinite(p.d)) fail("non-finite plane in the top tree");
@@ -204,6 +221,10 @@ void StoreReader::open_and_check() {
       else page_octants_[n.index] |= std::uint8_t(1u << oct);
     }
   }
+  return page_seen;
+}
+
+void StoreReader::check_directory(const std::vector<std::uint8_t>& page_seen) const {
   // Directory: pages inside the pages section, aligned, non-overlapping, each referenced.
   std::vector<std::pair<std::uint64_t, std::uint64_t>> pr;
   pr.reserve(dir_.size());

@@ -50,7 +50,15 @@ class StoreReader {
   Octree load_all() const;
 
  private:
+  /// At open, in this order: the header (magic, version, checksum, sizes, frame), the sections'
+  /// sizes and places, the pinned sections read (checksums), the top tree from its root (returns,
+  /// per page, whether the top tree names it), the directory's pages.
   void open_and_check();
+  void check_header();
+  void check_sections() const;
+  void load_sections();
+  std::vector<std::uint8_t> check_top_tree();
+  void check_directory(const std::vector<std::uint8_t>& page_seen) const;
   PageContext page_context(std::uint32_t id) const;
   void read_at(std::uint64_t off, void* dst, std::size_t n) const;
   [[noreturn]] void fail(const std::string& what) const;

@@ -17,6 +17,10 @@ namespace ebp {
 FileHeader new_file_header(const Vec3d& origin, const Vec3d& root_lo, double root_size, int leaf_level, std::uint32_t num_triangles,
                            const BuildParams& params, std::size_t page_target, bool closed);
 
+/// The build options a header keeps (every other field of BuildParams at its default), each from
+/// the slot kBuildOptions names.
+BuildParams header_build_params(const FileHeader& h);
+
 /// Writes `n` bytes at `*off` as section `*s` (offset, size, CRC-32C), then moves `*off` to the
 /// next 8-byte boundary.
 void write_section(bvhbench::AtomicOutputFile& f, std::uint64_t* off, const void* data, std::size_t n, Section* s);

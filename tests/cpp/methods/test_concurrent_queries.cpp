@@ -23,6 +23,7 @@
 #include "harness/run/run_job.hpp"
 #include "harness/run/thread_replay.hpp"
 #include "harness/util/errors.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/store/writer.hpp"
 #include "support/test_support.hpp"
@@ -46,7 +47,7 @@ const std::string& cow_store() {
     static TmpDir dir("concurrent_queries_test");
     ebp::BuildParams bp;
     bp.threads = 1;
-    const ebp::Octree t = ebp::Octree::build(cow().vertices, cow().triangles, bp);
+    const ebp::Octree t = ebp::build_octree(cow().vertices, cow().triangles, bp);
     ebp::StoreWriteOptions o;
     o.page_target = 4096;
     o.info_json = "{}";

@@ -34,11 +34,11 @@ def store(tmp_path_factory):
     return d
 
 
-def job(store, method, query="inside", check=0):
+def job(store, method, query="inside", check=0, threads=1):
     out = store / "r.json"
     out.unlink(missing_ok=True)
     p = run("run", "--mesh", MESH, "--method", method, "--queries", store / "q.npy", "--query", query,
-            "--repeat", 1, "--out", out, check=check)
+            "--repeat", 1, "--threads", threads, "--out", out, check=check)
     return p, (json.loads(out.read_text()) if out.exists() else None)
 
 
@@ -57,6 +57,14 @@ def test_a_store_job_records_the_stores_build_options(store):
     assert mem["job"]["params_key"] == "leaf_factor=3,max_planes=6"
     assert "params_read_from_structure" not in mem["job"]
     assert mem["structure"]["leaf_level"] == ooc["structure"]["leaf_level"]
+
+
+def test_a_store_job_records_the_threads_the_store_was_built_on(store):
+    _, r = job(store, f"ebp_octree:store={store / 'cow.ebp'}", threads=2)
+    assert r["status"] == "ok", r["message"]
+    assert r["job"]["threads"] == 2 and r["build"]["threads"] == 1  # `ebp build --threads 1`, not the job's T
+    _, mem = job(store, "ebp_octree", threads=2)
+    assert mem["build"]["threads"] == 2  # built by the job, on its threads
 
 
 @pytest.mark.parametrize("option", ["leaf_factor=8", "leaf_factor=5", "max_planes=6", "cluster_angle=30"])

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "harness/core/mesh.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
@@ -153,6 +154,6 @@ inline std::vector<Vec3d> clip_exact(const Vec3d& lo, const Vec3d& hi, const Vec
   return poly;
 }
 
-inline Octree build(const Mesh& m, BuildParams bp = {}) { return Octree::build(m.vertices, m.triangles, bp); }
+inline Octree build(const Mesh& m, BuildParams bp = {}) { return build_octree(m.vertices, m.triangles, bp); }
 
 }  // namespace ebp_test

@@ -20,6 +20,7 @@
 #include "harness/util/errors.hpp"
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
@@ -156,7 +157,7 @@ void check_far(const bvhbench::Mesh& base, double offset, const std::string& nam
   const std::vector<Vec3d> pts = points(m, 150);
   BuildParams bp;
   bp.threads = 2;
-  const Octree t = Octree::build(m.vertices, m.triangles, bp);
+  const Octree t = build_octree(m.vertices, m.triangles, bp);
   EXPECT_NE(t.origin, Vec3d(0, 0, 0)) << name;
   EXPECT_LT(norm(t.root_centre), 8 * t.root_size) << name << ": the geometry is near the frame's origin";
 
@@ -228,7 +229,7 @@ TEST(EbpFarFromOrigin, OrdinaryModelsKeepTheOrigin) {
   EXPECT_LE(std::fabs(po.x - 1e6), 8.0);
   // The built structure of an ordinary model: origin 0, its vertices the input rounded to float.
   const bvhbench::Mesh torus = bvhbench::test::torus(24, 12);
-  const Octree t = Octree::build(torus.vertices, torus.triangles, BuildParams{});
+  const Octree t = build_octree(torus.vertices, torus.triangles, BuildParams{});
   EXPECT_EQ(t.origin, Vec3d(0, 0, 0));
   for (const LeafTri& lt : t.tris) {
     const auto& tri = torus.triangles[lt.tri];
@@ -257,7 +258,7 @@ TEST(EbpFarFromOrigin, OneTriangleFarOut) {
 
 TEST(EbpFarFromOrigin, OlderStoreFormatRefused) {
   const bvhbench::Mesh m = bvhbench::test::torus(24, 12);
-  const Octree t = Octree::build(m.vertices, m.triangles, BuildParams{});
+  const Octree t = build_octree(m.vertices, m.triangles, BuildParams{});
   TmpDir d;
   const std::string path = d.file("old.ebp");
   write_store_atomic(t, path, StoreWriteOptions{});

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/reader.hpp"
@@ -95,7 +96,7 @@ ExtBuildOptions tiny_options(const TmpDir& d, std::size_t page = 4096) {
 void check_same(const bvhbench::Mesh& m, const std::string& name, std::size_t page = 4096) {
   BuildParams bp;
   bp.threads = 2;
-  const Octree t = Octree::build(m.vertices, m.triangles, bp);
+  const Octree t = build_octree(m.vertices, m.triangles, bp);
   TmpDir d;
   StoreWriteOptions wo;
   wo.page_target = page;

@@ -17,6 +17,7 @@
 #include "harness/core/mesh.hpp"
 #include "harness/core/query_set.hpp"
 #include "harness/io/mesh_io.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/certificate.hpp"
 #include "methods/ebp_octree/core/certificate_scan.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
@@ -349,7 +350,7 @@ TEST(EbpCertificate, OutOfCoreIsBitIdentical) {
   const Mesh m = bvhbench::load_mesh(shared_mesh("fandisk.obj"));
   BuildParams bp;
   bp.threads = 1;
-  const Octree t = Octree::build(m.vertices, m.triangles, bp);
+  const Octree t = build_octree(m.vertices, m.triangles, bp);
   bvhbench::test::TmpDir d("ebp_cert_test");
   StoreWriteOptions o;
   o.page_target = 4096;

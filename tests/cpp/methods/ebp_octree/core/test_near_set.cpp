@@ -19,6 +19,7 @@
 #include "harness/core/mesh.hpp"
 #include "harness/core/query_set.hpp"
 #include "harness/io/mesh_io.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/near_set.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/query.hpp"
@@ -216,7 +217,7 @@ TEST(EbpNearSet, OutOfCorePagesAnswerBitForBit) {
   const Mesh m = bvhbench::load_mesh(shared_mesh("fandisk.obj"));
   BuildParams bp;
   bp.threads = 1;
-  const Octree t = Octree::build(m.vertices, m.triangles, bp);
+  const Octree t = build_octree(m.vertices, m.triangles, bp);
   bvhbench::test::TmpDir d("ebp_near_test");
   StoreWriteOptions o;
   o.page_target = 4096;

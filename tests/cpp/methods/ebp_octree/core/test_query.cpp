@@ -15,6 +15,7 @@
 
 #include "harness/core/mesh.hpp"
 #include "harness/io/mesh_io.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/ebp_test_support.hpp"
@@ -96,8 +97,8 @@ TEST(EbpQuery, OpenAndDegenerateInputs) {
     EXPECT_TRUE(q.inside({0.1, -0.2, 0.3}));
     EXPECT_FALSE(q.inside({0.1, -0.2, 3.3}));
   }
-  EXPECT_THROW(Octree::build({}, {}, BuildParams{}), std::invalid_argument);
-  EXPECT_THROW(Octree::build({{0, 0, 0}}, {{0, 0, 1}}, BuildParams{}), std::invalid_argument);
+  EXPECT_THROW(build_octree({}, {}, BuildParams{}), std::invalid_argument);
+  EXPECT_THROW(build_octree({{0, 0, 0}}, {{0, 0, 1}}, BuildParams{}), std::invalid_argument);
 }
 
 // Triangles with two equal vertices (zero area: the closest point of a segment) first in the

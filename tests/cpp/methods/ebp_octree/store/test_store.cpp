@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/store/out_of_core.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
@@ -44,7 +45,7 @@ using bvhbench::test::torus;
 Octree build(const bvhbench::Mesh& m) {
   BuildParams bp;
   bp.threads = 1;
-  return Octree::build(m.vertices, m.triangles, bp);
+  return build_octree(m.vertices, m.triangles, bp);
 }
 
 std::string write(const Octree& t, const std::string& path, std::size_t page = 4096) {

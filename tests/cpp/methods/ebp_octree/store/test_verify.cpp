@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "methods/ebp_octree/build/external_build.hpp"
+#include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/format.hpp"
 #include "methods/ebp_octree/store/reader.hpp"
@@ -43,7 +44,7 @@ std::string write_store_of(const bvhbench::Mesh& m, const std::string& path, std
   StoreWriteOptions o;
   o.page_target = page;
   o.info_json = R"({"test":true})";
-  write_store_atomic(Octree::build(m.vertices, m.triangles, bp), path, o);
+  write_store_atomic(build_octree(m.vertices, m.triangles, bp), path, o);
   return path;
 }
 
