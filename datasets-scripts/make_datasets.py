@@ -168,6 +168,20 @@ def up_to_date(entry: dict | None, out_dir: str, family: str, full_params: dict)
     return os.path.exists(path) and file_sha256(path) == entry["sha256"]
 
 
+def declared_sizes() -> dict:
+    """{"presets": {preset: {mesh name: triangles}}} for the meshes whose size a preset declares
+    (a `triangles` parameter): how `bvhbench suite` prices a suite before its data exists."""
+    out = {}
+    for pname, specs in PRESETS.items():
+        sizes = {name: int(params["triangles"]) for name, _, params in specs if params.get("triangles")}
+        if sizes:
+            out[pname] = sizes
+    return {"about": "Declared triangle counts of the presets' meshes (datasets-scripts/bvhdata/presets.py), "
+                     "read by `bvhbench suite` to price a suite before its data exists. Written by "
+                     "`make_datasets.py --declared-sizes`; a test checks it is current.",
+            "presets": out}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", choices=sorted(PRESETS), help="which meshes to make")
@@ -179,8 +193,15 @@ def main(argv=None) -> int:
                          "../shared/meshes from the repo root)")
     ap.add_argument("--list", action="store_true", help="list presets, meshes and families")
     ap.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    ap.add_argument("--declared-sizes", action="store_true",
+                    help="print every preset's declared triangle counts as JSON (what "
+                         "datasets-scripts/preset_sizes.json holds for the suite's estimate) and exit")
     args = ap.parse_args(argv)
     progress.quiet = args.quiet
+
+    if args.declared_sizes:
+        print(json.dumps(declared_sizes(), indent=1, sort_keys=True))
+        return 0
 
     if args.list:
         for fname, fam in FAMILIES.items():
