@@ -97,10 +97,9 @@ data: deps
 report: venv
 	$(VPY) plots/report.py results/default
 
-# $(call run_suite,NAME): suites/NAME.yml into results/NAME/, announced with its expected time
-# (tools/suite_estimate.py), then its report.
+# $(call run_suite,NAME): suites/NAME.yml into results/NAME/ (the runner says first how long it
+# expects to take, and corrects it after each job), then its report.
 define run_suite
-	@$(VPY) tools/suite_estimate.py suites/$(1).yml --out results/$(1) --bvhbench $(BVHBENCH) --resume || true
 	$(BVHBENCH) suite suites/$(1).yml --out results/$(1) --resume
 	$(VPY) plots/report.py results/$(1)
 	@echo "report: results/$(1)/report/report.md and report.html"
@@ -116,7 +115,7 @@ bench: build-runner
 # How long the default suite (or SUITE=NAME) is expected to take here, without running it.
 SUITE ?= default
 estimate: build-runner
-	$(VPY) tools/suite_estimate.py suites/$(SUITE).yml --out results/$(SUITE) --bvhbench $(BVHBENCH) --resume
+	$(BVHBENCH) suite suites/$(SUITE).yml --out results/$(SUITE) --resume --estimate
 
 sweeps: build-runner data
 	$(call run_suite,sweeps)

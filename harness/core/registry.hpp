@@ -17,7 +17,7 @@ namespace bvhbench {
 
 /// Which jobs of a suite one built structure of a method configuration may serve. A suite runs
 /// the jobs of one structure (mesh, method with its options, threads) in one child process after
-/// one build (docs/suites.md, "One build per structure"); a method narrows that where its
+/// one build (docs/results.md, "Shared builds"); a method narrows that where its
 /// structure is particular to more than its options.
 enum class StructureSharing {
   /// Every query type and query set on the mesh: build() reads nothing of the queries to come,

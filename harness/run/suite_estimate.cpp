@@ -24,7 +24,7 @@ namespace bvhbench {
 namespace {
 
 // What the estimate assumes where no result says better. Measured on this project's 2-core
-// machine (docs/suites.md, "Expected time"): loading a binary PLY and hashing it, per triangle;
+// machine (suites/README.md, "Expected time"): loading a binary PLY and hashing it, per triangle;
 // a child's fixed cost (start, registration, calibration kernel, accuracy); the oracle (exact
 // winding numbers over a hierarchy), per triangle to build and per query x log2 triangles.
 constexpr double kLoadSecondsPerTriangle = 1.5e-7;
