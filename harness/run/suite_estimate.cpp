@@ -262,6 +262,20 @@ const CostObservation* nearest(const std::vector<CostObservation>& obs, const Jo
   return best;
 }
 
+/// The names of the options in a params key ("k=v,k=v" -> "k,k"): two configurations that set the
+/// same options (a store, a cache) price alike where no result of the very same one exists.
+std::string option_names(const std::string& params_key) {
+  std::string names;
+  std::size_t at = 0;
+  while (at < params_key.size()) {
+    const std::size_t comma = std::min(params_key.find(',', at), params_key.size());
+    const std::string pair = params_key.substr(at, comma - at);
+    names += (names.empty() ? "" : ",") + pair.substr(0, pair.find('='));
+    at = comma + 1;
+  }
+  return names;
+}
+
 bool batch_job(const JobPlan& job) {
   return job.method.resolved() && job.method.params.has("batch") && job.method.params.get_bool("batch");
 }
@@ -270,8 +284,9 @@ bool batch_job(const JobPlan& job) {
 
 double SuiteEstimator::build_seconds(const JobPlan& job, double t, bool* known) const {
   const std::string key = job.method.params_key();
+  const std::string names = option_names(key);
   const CostObservation* o = nearest(obs_, job, false, [&](const CostObservation& c) {
-    return std::make_pair(c.params_key != key, std::abs(std::log(t / c.triangles)));
+    return std::make_tuple(c.params_key != key, option_names(c.params_key) != names, std::abs(std::log(t / c.triangles)));
   });
   *known = o != nullptr;
   if (!o) return median_build_per_triangle_ * t * log2_of(t);
@@ -284,8 +299,8 @@ double SuiteEstimator::query_seconds(const JobPlan& job, double t, bool* known) 
   const bool batch = batch_job(job);
   const CostObservation* o = nearest(obs_, job, true, [&](const CostObservation& c) {
     const double apart = std::abs(std::log(t / c.triangles));
-    return std::make_tuple(c.batch != batch, apart > std::log(2.0), c.params_key != key, c.kind != job.queries.kind,
-                           apart);
+    return std::make_tuple(c.batch != batch, apart > std::log(2.0), c.params_key != key,
+                           option_names(c.params_key) != option_names(key), c.kind != job.queries.kind, apart);
   });
   *known = o != nullptr;
   if (!o) return median_query_;
