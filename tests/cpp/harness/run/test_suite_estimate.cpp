@@ -74,10 +74,13 @@ TEST(SuiteEstimate, ATenTimesBiggerMeshOrQuerySetIsPricedHigher) {
     const SuitePrice small = price_of(e, suite_on(d, "small", 1000), true, d.file("data"));
     const SuitePrice big = price_of(e, suite_on(d, "big", 1000), true, d.file("data"));
     const SuitePrice more = price_of(e, suite_on(d, "small", 10000), true, d.file("data"));
-    EXPECT_GT(big.total(), 3 * small.total());
+    EXPECT_GT(big.total(), small.total() + 0.5);
+    // From an observed build (1 s at 50k triangles), ten times the triangles is over ten times the build.
+    if (observed) EXPECT_GT(big.total(), 3 * small.total());
     EXPECT_GT(more.total(), small.total());
     EXPECT_EQ(small.jobs, 4u);
-    EXPECT_EQ(small.guessed, observed ? 0u : 4u);
+    // The observation is of inside queries: the distance jobs are priced at the median rates.
+    EXPECT_EQ(small.guessed, observed ? 2u : 4u);
   }
 }
 
