@@ -37,7 +37,7 @@ define apt_install
 	fi
 endef
 
-.PHONY: help deps test-deps venv build build-runner test test-cpp test-python gate bench estimate sweeps python data stability large paper huge rebaseline fixture report clean distclean
+.PHONY: help deps test-deps venv build build-runner test test-cpp test-python gate bench estimate sweeps python data stability large paper huge rebaseline fixture calibration report clean distclean
 
 help:
 	@echo "make bench      - install, build the runner, make default data, run the default suite, write results/default/report/ (about 12 minutes from a fresh clone on 2 cores)"
@@ -49,10 +49,11 @@ help:
 	@echo "make build      - configure and build $(BVHBENCH) and every test ($(BUILD_TYPE))"
 	@echo "make stability  - the stability suite: every method on every stress mesh"
 	@echo "make large      - every method on a closed 4M-triangle model (about 15 minutes)"
-	@echo "make paper      - the paper's tables at 30M+ triangles (about an hour)"
+	@echo "make paper      - the paper's tables at 32M triangles: data, out-of-core stores, suite, report (its expected time printed first)"
 	@echo "make huge       - the EBP-Octree out of core on a 128M-triangle model: generate, build the store in 1 GiB, query from 256 MiB"
 	@echo "make rebaseline - regenerate the committed CI baseline (results/baseline/) on purpose"
 	@echo "make fixture    - regenerate the report tests' result fixture (tests/fixtures/results_small/) on purpose"
+	@echo "make calibration - remake results/calibration/, the 1M-triangle runs every suite's expected time is priced from"
 
 deps:
 	$(call apt_install,$(APT_PACKAGES))
@@ -97,10 +98,9 @@ data: deps
 report: venv
 	$(VPY) plots/report.py results/default
 
-# $(call run_suite,NAME): suites/NAME.yml into results/NAME/, announced with its expected time
-# (tools/suite_estimate.py), then its report.
+# $(call run_suite,NAME): suites/NAME.yml into results/NAME/ (the runner says first how long it
+# expects to take, and corrects it after each job), then its report.
 define run_suite
-	@$(VPY) tools/suite_estimate.py suites/$(1).yml --out results/$(1) --bvhbench $(BVHBENCH) --resume || true
 	$(BVHBENCH) suite suites/$(1).yml --out results/$(1) --resume
 	$(VPY) plots/report.py results/$(1)
 	@echo "report: results/$(1)/report/report.md and report.html"
@@ -116,7 +116,7 @@ bench: build-runner
 # How long the default suite (or SUITE=NAME) is expected to take here, without running it.
 SUITE ?= default
 estimate: build-runner
-	$(VPY) tools/suite_estimate.py suites/$(SUITE).yml --out results/$(SUITE) --bvhbench $(BVHBENCH) --resume
+	$(BVHBENCH) suite suites/$(SUITE).yml --out results/$(SUITE) --resume --estimate
 
 sweeps: build-runner data
 	$(call run_suite,sweeps)
@@ -136,22 +136,38 @@ large: build-runner
 	$(VPY) plots/report.py results/large
 
 # $(call build_stores,DIR,MODELS): DIR/M.ebp built out of core (1 GiB budget, 2 threads) for each
-# model M whose store is missing or older than DIR/M.ply.
+# model M whose store is missing or older than DIR/M.ply, each announced with its expected time:
+# STORE_S_PER_MTRI seconds per million triangles (7.6 s for the 1M bunny, 2 cores shared with
+# other builds; the external build is about linear in the triangles), then its time.
+STORE_S_PER_MTRI := 8
 define build_stores
 	@for m in $(2); do \
 	  if [ ! -f $(1)/$$m.ebp ] || [ $(1)/$$m.ply -nt $(1)/$$m.ebp ]; then \
+	    tri=$$(head -c 4096 $(1)/$$m.ply | grep -a -m1 '^element face' | awk '{print $$3}'); \
+	    echo "store: $(1)/$$m.ebp from $$tri triangles, expected ~$$(( $${tri:-0} * $(STORE_S_PER_MTRI) / 1000000 ))s"; \
+	    t0=$$SECONDS; \
 	    $(BVHBENCH) ebp build --mesh $(1)/$$m.ply --out $(1)/$$m.ebp --memory-budget 1024 --threads 2 || exit 1; \
+	    echo "store: $(1)/$$m.ebp took $$((SECONDS - t0))s"; \
 	  fi; \
 	done
 endef
 
+# $(call timed,STEP,COMMAND): COMMAND, then how long STEP took (the split of a long target).
+define timed
+	@t0=$$SECONDS; $(2) || exit 1; echo "$(1) took $$((SECONDS - t0))s"
+endef
+
 PAPER_MODELS := bunny_closed_32m scan_like_32m
 
+# The paper's tables: the two 32M-triangle models (each announced with its expected time), their
+# out-of-core stores, the suite (which prints its expected time before it starts: `make estimate
+# SUITE=paper` alone, also before the data exists), the report. Each step says how long it took.
 paper: build-runner
-	$(VPY) datasets-scripts/make_datasets.py --preset paper
+	@$(BVHBENCH) suite suites/paper.yml --out results/paper --resume --estimate
+	$(call timed,paper: data,$(VPY) datasets-scripts/make_datasets.py --preset paper)
 	$(call build_stores,data/paper,$(PAPER_MODELS))
-	$(BVHBENCH) suite suites/paper.yml --out results/paper --resume
-	$(VPY) plots/report.py results/paper
+	$(call timed,paper: suite,$(BVHBENCH) suite suites/paper.yml --out results/paper --resume)
+	$(call timed,paper: report,$(VPY) plots/report.py results/paper)
 
 # Beyond the paper: 128M triangles, generated in chunks (2.4 GB of PLY), the store built out of
 # core within a 1 GiB budget (its vertices paged; ≈ 12 GB on disk, with ≈ 3.6 GB of sort runs
@@ -164,6 +180,15 @@ huge: build-runner
 	$(call build_stores,data/huge,$(HUGE_MODELS))
 	$(BVHBENCH) suite suites/huge.yml --out results/huge --resume
 	$(VPY) plots/report.py results/huge
+
+# The results every suite's expected time is priced from (suites/calibration.yml), remade on
+# purpose; then commit results/calibration/runs and summary.csv.
+calibration: build-runner
+	$(VPY) datasets-scripts/make_datasets.py --preset default --only $(BENCH_MODELS)
+	mkdir -p results/calibration/data
+	$(BVHBENCH) ebp build --mesh data/default/bunny_closed_1m.ply --out results/calibration/data/bunny_closed_1m.ebp --memory-budget 1024 --threads 2
+	rm -rf results/calibration/runs results/calibration/summary.csv
+	$(BVHBENCH) suite suites/calibration.yml --out results/calibration
 
 rebaseline: build test-deps
 	@if [ -x tools/ci_gate.sh ]; then PATH=$(abspath $(VENV))/bin:$$PATH BVHBENCH_EXE=$(abspath $(BVHBENCH)) tools/ci_gate.sh --rebaseline; \

@@ -85,6 +85,23 @@ def verify(name: str, fam, stats: dict, check: dict) -> None:
         raise VerificationError(f"{name}: " + "; ".join(problems))
 
 
+# Seconds per million triangles to make a mesh of a family, for the expected time said before a
+# long one starts (measured on this project's 2-core machine while other builds shared it: the
+# 1M closed bunny took 72 s, 40 of them the statistics and the trimesh check; the 500k scan-like
+# 26 s; the streamed 128M scan about 2 minutes). Others: DEFAULT_SECONDS_PER_MTRI.
+SECONDS_PER_MTRI = {"real_closed": 70.0, "scan_like": 50.0, "scan_like_streamed": 1.0}
+DEFAULT_SECONDS_PER_MTRI = 50.0
+
+
+def expected_seconds(family: str, params: dict) -> float | None:
+    """The expected time to make a mesh of `family` with `params`; None when its size is not
+    declared (a native-size real model, a stress case: small)."""
+    triangles = params.get("triangles")
+    if not triangles:
+        return None
+    return SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI) * triangles / 1e6
+
+
 def make_mesh(ctx: Context, out_dir: str, name: str, family: str, params: dict) -> dict:
     fam = FAMILIES[family]
     full = {**fam.defaults, **params}
@@ -168,6 +185,20 @@ def up_to_date(entry: dict | None, out_dir: str, family: str, full_params: dict)
     return os.path.exists(path) and file_sha256(path) == entry["sha256"]
 
 
+def declared_sizes() -> dict:
+    """{"presets": {preset: {mesh name: triangles}}} for the meshes whose size a preset declares
+    (a `triangles` parameter): how `bvhbench suite` prices a suite before its data exists."""
+    out = {}
+    for pname, specs in PRESETS.items():
+        sizes = {name: int(params["triangles"]) for name, _, params in specs if params.get("triangles")}
+        if sizes:
+            out[pname] = sizes
+    return {"about": "Declared triangle counts of the presets' meshes (datasets-scripts/bvhdata/presets.py), "
+                     "read by `bvhbench suite` to price a suite before its data exists. Written by "
+                     "`make_datasets.py --declared-sizes`; a test checks it is current.",
+            "presets": out}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", choices=sorted(PRESETS), help="which meshes to make")
@@ -179,8 +210,15 @@ def main(argv=None) -> int:
                          "../shared/meshes from the repo root)")
     ap.add_argument("--list", action="store_true", help="list presets, meshes and families")
     ap.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    ap.add_argument("--declared-sizes", action="store_true",
+                    help="print every preset's declared triangle counts as JSON (what "
+                         "datasets-scripts/preset_sizes.json holds for the suite's estimate) and exit")
     args = ap.parse_args(argv)
     progress.quiet = args.quiet
+
+    if args.declared_sizes:
+        print(json.dumps(declared_sizes(), indent=1, sort_keys=True))
+        return 0
 
     if args.list:
         for fname, fam in FAMILIES.items():
@@ -232,6 +270,10 @@ def main(argv=None) -> int:
             skipped += 1
             continue
         t0 = time.monotonic()
+        expected = expected_seconds(family, full)
+        if expected and expected >= 30:
+            log(f"{name}: making {full['triangles']:,} triangles, expected ~{expected / 60:.0f} min "
+                f"(at {SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI):.0f} s per million triangles)")
         entry = make_mesh(ctx, out_dir, name, family, params)
         manifest["meshes"].append(entry)
         made += 1

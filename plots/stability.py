@@ -55,7 +55,7 @@ QUERIES = ("inside", "distance")
 # Worse statuses win when several jobs fall in one cell. `unsupported` is the mildest: a method
 # that says it does not answer is honest; `rejected_input` is below the wrong answers because
 # refusing a mesh (the empty one must be refused) at least says so.
-SEVERITY = ["missing", "unsupported", "ok", "unchecked", "rejected_input", "ok_wrong", "error",
+SEVERITY = ["missing", "not_run", "unsupported", "ok", "unchecked", "rejected_input", "ok_wrong", "error",
             "timeout", "oom", "crash"]
 
 CSV_COLUMNS = [

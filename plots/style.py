@@ -62,6 +62,7 @@ STATUS_COLORS = {
     "oom": "#a65628",
     "crash": "#e41a1c",
     "missing": "#ffffff",
+    "not_run": "#f0f0f0",        # its group's child died in an earlier job (suite --resume runs it)
 }
 STATUS_LABELS = {
     "ok": "ok",
@@ -74,6 +75,7 @@ STATUS_LABELS = {
     "oom": "out of memory",
     "crash": "crash",
     "missing": "not run",
+    "not_run": "not run (its structure's child died earlier)",
 }
 
 HAPTIC_RATE_HZ = 1000.0          # a haptic loop needs 1 kHz

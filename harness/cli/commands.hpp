@@ -15,6 +15,7 @@ void add_queries_command(CLI::App& app);    // queries_command.cpp
 void add_run_command(CLI::App& app);        // run_command.cpp
 void add_suite_command(CLI::App& app);      // suite_command.cpp
 void add_run_child_command(CLI::App& app);  // run_child_command.cpp
+void add_run_group_command(CLI::App& app);  // run_group_command.cpp
 void add_truth_command(CLI::App& app);      // truth_command.cpp
 void add_compare_command(CLI::App& app);    // compare_command.cpp
 void add_mesh_info_command(CLI::App& app);  // mesh_info_command.cpp

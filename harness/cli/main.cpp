@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     add_run_command(app);
     add_suite_command(app);
     add_run_child_command(app);
+    add_run_group_command(app);
     add_compare_command(app);
     add_mesh_info_command(app);
     for (auto& c : Registry::global().commands()) c.setup(app);

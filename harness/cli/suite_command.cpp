@@ -28,7 +28,7 @@ void add_suite_command(CLI::App& app) {
   struct Opts {
     std::string file, out, filter, data_dir, executor = "local", scheduler, worker_exe;
     int dask_workers = 0;
-    bool resume = false, list = false, json = false, no_truth = false;
+    bool resume = false, list = false, json = false, no_truth = false, estimate = false;
     double timeout_s = -1, memory_limit_mb = -1;
     int repeat = -1;
   };
@@ -45,6 +45,8 @@ void add_suite_command(CLI::App& app) {
   cmd->add_flag("--json", o->json,
                 "With --list: every job as JSON (id, mesh, query set, query, method and its canonical key, threads, "
                 "repeat): what tools read instead of the suite file");
+  cmd->add_flag("--estimate", o->estimate,
+                "Print how long the suite is expected to take here (with --resume: what is left), and exit");
   cmd->add_option("--timeout", o->timeout_s, "Per-job time limit in seconds (overrides the suite)");
   cmd->add_option("--memory-limit", o->memory_limit_mb, "Per-job address-space limit in MiB (overrides the suite)");
   cmd->add_option("--repeat", o->repeat, "Timed passes per job (overrides the suite)");
@@ -91,6 +93,12 @@ void add_suite_command(CLI::App& app) {
     run.out = o->out;
     run.data_dir = o->data_dir;
     run.resume = o->resume;
+    if (o->estimate) {
+      // The local executor shares builds, Dask's does not (dask_job_executor.hpp says why).
+      std::cerr << "suite " << cfg.name << ": " << estimate_suite(cfg, jobs, run, o->executor == "local").describe()
+                << "\n";
+      return;
+    }
     std::unique_ptr<JobExecutor> executor;
     if (o->executor == "dask")
       executor = std::make_unique<DaskJobExecutor>(DaskOptions{o->scheduler, o->dask_workers, o->worker_exe, "", ""});

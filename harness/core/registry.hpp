@@ -15,6 +15,22 @@ namespace CLI { class App; }
 
 namespace bvhbench {
 
+/// Which jobs of a suite one built structure of a method configuration may serve. A suite runs
+/// the jobs of one structure (mesh, method with its options, threads) in one child process after
+/// one build (docs/results.md, "Shared builds"); a method narrows that where its
+/// structure is particular to more than its options.
+enum class StructureSharing {
+  /// Every query type and query set on the mesh: build() reads nothing of the queries to come,
+  /// and queries leave nothing in the structure but path state (reset before each pass).
+  every_job,
+  /// The jobs of one query type: build() reads BuildContext::query_type (it builds only what
+  /// that type needs, e.g. an index that only distance queries use).
+  same_query_type,
+  /// Each job alone: build() reads the query points (BuildContext::query_bounds sizes a band or a
+  /// cache), or queries leave state a later job would inherit (an out-of-core page cache).
+  job_alone,
+};
+
 struct MethodInfo {
   std::string name;          ///< [a-z0-9_]+
   std::string description;   ///< one line
@@ -41,6 +57,10 @@ struct MethodInfo {
   /// Checks that the options make sense together, beyond each one alone (e.g. build options
   /// given beside a prebuilt store); throws InputError naming them. Optional.
   std::function<void(const Params&)> check;
+  /// Which jobs one structure of a configuration may serve (StructureSharing). Unset: every job
+  /// (every_job). Set it when build() reads BuildContext's query fields, or when queries leave
+  /// state in the structure beyond path state; a suite reads it to group jobs before running.
+  std::function<StructureSharing(const Params&)> sharing;
 };
 
 /// Whether `method`, an instance of `info`, answers `q`: the registered capability, narrowed by

@@ -2,6 +2,7 @@
 /// A command run in a child process with a wall-clock limit and an address-space limit, so that
 /// a crash, a hang or a blow-up of what it runs (a job, a query generator, the oracle) ends the
 /// child, not the caller. Linux: fork/exec, a process group, PR_SET_PDEATHSIG, RLIMIT_AS.
+#include <cstddef>
 #include <string>
 #include <sys/types.h>
 #include <vector>
@@ -26,6 +27,45 @@ struct ChildOutcome {
   double seconds = 0;      ///< wall clock from fork to its end
   std::string stderr_tail; ///< the last 2000 bytes of its output, trailing blanks trimmed
 };
+
+/// A child started and not yet waited for, polled by its caller: what run_child() waits with,
+/// and what the suite's local executor polls while a child runs several jobs in turn (it reads
+/// each job's result as it appears, and gives each job its own time limit: restart_clock()).
+/// Same process setup as run_child(). Not copyable; the child is SIGKILLed and reaped if this is
+/// destroyed before it ended.
+class ChildRun {
+ public:
+  /// Starts `args` under `limits`, its output to `log_path`. Throws std::runtime_error only if
+  /// fork() fails.
+  ChildRun(const std::vector<std::string>& args, const ChildLimits& limits, const std::string& log_path);
+  ~ChildRun();
+  ChildRun(const ChildRun&) = delete;
+  ChildRun& operator=(const ChildRun&) = delete;
+
+  /// Looks once without blocking: true when the child has ended (outcome() is then final). Kills
+  /// it when the time limit, counted from the start or the last restart_clock(), has passed, or
+  /// when limits.outlive_no_longer_than is gone.
+  bool poll();
+  /// Starts the time limit again from now (the next job of the child gets the whole limit).
+  void restart_clock();
+  /// Seconds since the start.
+  double seconds() const;
+  /// How it ended; final once poll() returned true.
+  const ChildOutcome& outcome() const { return out_; }
+
+ private:
+  void reap(int status);
+  pid_t pid_ = -1;
+  bool ended_ = false;
+  ChildLimits limits_;
+  std::string log_path_;
+  double started_ = 0, clock_from_ = 0;  // steady-clock seconds
+  ChildOutcome out_;
+};
+
+/// The last `max_bytes` of a file (a child's log), "..." before a cut, trailing blanks trimmed;
+/// "" when it cannot be read.
+std::string log_tail(const std::string& path, std::size_t max_bytes = 2000);
 
 /// Runs `args` (args[0] an executable path, no PATH search) and waits for it. The child gets
 /// its own process group, so that a timeout or an interrupt kills whatever it started too; it

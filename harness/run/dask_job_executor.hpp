@@ -14,6 +14,12 @@
 ///   runs/ID.json.child, so a result that came back survives a killed runner (--resume adopts
 ///   it); the runner then records it as for a local job.
 ///
+/// Builds are not shared here: every job runs on its own (`bvhbench run`), with its own build
+/// (submit_group is the default, one submit per job). The jobs of a comparison group (one mesh, one
+/// query set) must stay on one worker, and the jobs of one structure span query sets: binding both
+/// would put every job of a mesh on one worker, and the cluster would run a suite of one model on
+/// one machine. Their results have no build.id and build.jobs 1 (docs/results.md, "Shared builds").
+///
 /// Meshes, query sets, oracle files and the bvhbench program are read by the workers at the
 /// paths this machine gives: they must be on paths every worker shares (docs/dask.md).
 #include <cstddef>

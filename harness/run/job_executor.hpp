@@ -6,10 +6,10 @@
 ///
 /// What an executor must do:
 /// - run each submitted job as `bvhbench run` with the task's arguments in its own child process
-///   under the task's limits (child_process.hpp semantics: a crash, a hang, a blow-up is the
+///   under the task's limits, or a submitted group's jobs in one child (`bvhbench run-group`) (child_process.hpp semantics: a crash, a hang, a blow-up is the
 ///   job's status, never the executor's or the runner's end);
-/// - hand back, from collect(), the job's own result JSON, or the status row made from how its
-///   child ended (job_status.hpp: status_row) when it left none; the runner adds the job's
+/// - hand back, from collect(), each job's own result JSON, or the status row made from how its
+///   child ended (job_status.hpp: status_row, group_status_rows) when it left none; the runner adds the job's
 ///   identity and writes it atomically to runs/ID.json, so executors write nothing there;
 /// - while a job runs, it may keep its result at task.child_result_path (runs/ID.json.child):
 ///   a result found there by `--resume` is adopted, so a job that finished when the runner was
@@ -39,6 +39,14 @@ struct JobTask {
   std::string log_path;              ///< logs/ID.log: the child's output
 };
 
+/// Jobs that share one structure (build_groups.hpp), ready to run: one child, one build.
+struct GroupTask {
+  std::string id;             ///< the build.id of their results
+  std::vector<JobTask> jobs;  ///< in the order they run
+  std::string plan_path;      ///< logs/GROUP.plan.json: where a child's plan is written (group_plan.hpp)
+  std::string built_path;     ///< logs/GROUP.built.json: where the child says its build is done
+};
+
 /// A job that ended.
 struct JobFinished {
   JobTask task;
@@ -54,6 +62,16 @@ class JobExecutor {
   virtual std::size_t slots() const = 0;
   /// Starts the job, or queues it to start when a slot is free.
   virtual void submit(JobTask task) = 0;
+  /// Starts the jobs of one structure, or queues them. An executor that shares the build runs
+  /// them in one child, in order; when that child dies in one of them, the job that was running
+  /// gets its status and the jobs after it `not_run`. The default runs each job on its own
+  /// (submit), each with its own build.
+  virtual void submit_group(GroupTask group) {
+    for (JobTask& t : group.jobs) submit(std::move(t));
+  }
+  /// Whether submit_group() shares one build among a group's jobs (the suite's estimate prices
+  /// builds by it).
+  virtual bool shares_builds() const { return false; }
   /// Waits for a submitted job to end and returns it (in any order); nullopt when none is left.
   virtual std::optional<JobFinished> collect() = 0;
   /// A submitted job that has already ended, without waiting; nullopt when none has. An executor

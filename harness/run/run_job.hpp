@@ -1,8 +1,12 @@
 #pragma once
 /// One job: load the mesh, build one method, replay one query set (measured by the protocol of
 /// query_protocol.hpp), and assemble the result JSON of the contract (docs/results.md) and
-/// optionally the answers.
+/// optionally the answers. Several jobs of one structure: run_job_group, one build for all
+/// (run_job_group.cpp); a job alone is a group of one.
+#include <cstddef>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -36,13 +40,41 @@ inline constexpr const char* crash = "crash";
 inline constexpr const char* timeout = "timeout";
 inline constexpr const char* oom = "oom";
 inline constexpr const char* error = "error";
-inline constexpr const char* all[] = {ok, unsupported, rejected_input, crash, timeout, oom, error};
+/// A job of a group (jobs sharing one structure in one child) that never ran: the child died in
+/// an earlier job of the group (its status says how). `suite --resume` runs it again.
+inline constexpr const char* not_run = "not_run";
+inline constexpr const char* all[] = {ok, unsupported, rejected_input, crash, timeout, oom, error, not_run};
 }  // namespace status
 
-/// Runs the job in this process. Never throws for a method's or the input's failure: the
-/// returned result carries the status and message. (Usage errors in `spec` itself, such as an
-/// unknown method, are reported the same way with status rejected_input.)
+/// Runs the job in this process: a group of one (run_job_group). Never throws for a method's or
+/// the input's failure: the returned result carries the status and message. (Usage errors in
+/// `spec` itself, such as an unknown method, are reported the same way with status
+/// rejected_input.)
 nlohmann::json run_job(const JobSpec& spec);
+
+/// What a group's caller hears while it runs (run_job_group), each hook optional.
+struct GroupHooks {
+  /// The shared structure is built: its `build` block (build.id, seconds, bytes, ...).
+  std::function<void(const nlohmann::json& build)> built;
+  /// Job `k` (an index into the group's specs) starts its queries.
+  std::function<void(std::size_t k)> job_starts;
+  /// Job `k`'s result is final (called once per job, in the order they end).
+  std::function<void(std::size_t k, const nlohmann::json& result)> finished;
+};
+
+/// Runs jobs that share one structure, in this process: the same mesh, method spec and threads
+/// (and repeat, deadline); their query sets, query types, oracles and answers files may differ.
+/// Each job's query set is read and checked first (a job that cannot run is finished at once:
+/// rejected_input, unsupported); then the mesh is loaded and the method built once, with the
+/// build context of the first job that runs (a method whose build reads the queries is never
+/// grouped past what it declares: registry.hpp, StructureSharing); then each job's queries in
+/// turn, the protocol of query_protocol.hpp, the peak-RSS mark reset before each. Every result
+/// records the shared build: build.seconds and structure_bytes are the one build's, build.id is
+/// `build_id` (when not ""), build.jobs the group's size and build.position the job's place.
+/// A failure of a shared step (the mesh, the build) is every unfinished job's status; one of a
+/// job's own queries is that job's. Throws as run_job does not: never.
+std::vector<nlohmann::json> run_job_group(const std::vector<JobSpec>& specs, const std::string& build_id = "",
+                                          const GroupHooks& hooks = {});
 
 /// The `job` block for a spec, as far as it can be filled without running (used for status rows
 /// written by the suite when a child dies).

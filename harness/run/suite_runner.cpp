@@ -11,9 +11,11 @@
 #include <iterator>
 #include <map>
 
+#include "harness/run/build_groups.hpp"
 #include "harness/run/interrupt.hpp"
 #include "harness/run/job_status.hpp"
 #include "harness/run/suite_data.hpp"
+#include "harness/run/suite_estimate.hpp"
 #include "harness/run/summary_csv.hpp"
 #include "harness/util/atomic_file.hpp"
 #include "harness/util/json_path.hpp"
@@ -54,155 +56,245 @@ void copy_suite_file(const std::string& from, const fs::path& to) {
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+fs::path data_folder(const SuiteRunOptions& options) {
+  return options.data_dir.empty() ? fs::path(options.out) / "data" : fs::path(options.data_dir);
+}
+
 }  // namespace
 
-SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,
-                          JobExecutor& executor) {
-  const fs::path out = options.out;
-  const fs::path runs = out / "runs", logs = out / "logs";
-  const fs::path data = options.data_dir.empty() ? out / "data" : fs::path(options.data_dir);
-  fs::create_directories(out);
-  const FolderLock lock(out.string());  // one writer per results folder, until this returns
-  fs::create_directories(runs);
-  fs::create_directories(logs);
-  const ChildLimits limits{cfg.timeout_s, cfg.memory_limit_mb};
-  SuiteData shared(data.string(), logs.string(), self_exe(), limits, cfg.truth);
-  copy_suite_file(cfg.file, out / "suite.yml");
-  install_interrupt_handler();
+std::string result_path(const SuiteRunOptions& options, const JobPlan& j) {
+  return (fs::path(options.out) / "runs" / (j.id + ".json")).string();
+}
 
-  auto result_path = [&](const JobPlan& j) { return (runs / (j.id + ".json")).string(); };
-  auto child_path = [&](const JobPlan& j) { return (runs / (j.id + ".json.child")).string(); };
+bool job_done(const SuiteRunOptions& options, const JobPlan& j) {
+  json r;
+  if (read_result_file(result_path(options, j), &r)) return r.value("status", "") != status::not_run;
+  return read_result_file(result_path(options, j) + ".child", &r);
+}
 
-  std::vector<json> done;
-  SuiteRunSummary summary;
-  std::map<std::string, json> summary_rows;
-  for (auto& j : cfg.jobs) {
-    json r;
-    if (read_result_file(result_path(j), &r)) summary_rows[j.id] = r;
-  }
-  auto write_summary = [&] {
-    std::vector<json> rows;
-    for (auto& j : cfg.jobs) {
-      auto it = summary_rows.find(j.id);
-      if (it != summary_rows.end()) rows.push_back(it->second);
-    }
-    write_summary_csv((out / "summary.csv").string(), rows);
-  };
-  // Jobs this invocation will actually run (for the time-left estimate): --resume skips the rest.
-  std::size_t to_run = jobs.size();
+SuitePrice estimate_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,
+                          bool shared_builds) {
+  std::vector<bool> to_run(jobs.size(), true);
   if (options.resume)
-    for (auto& j : jobs)
-      if (fs::exists(result_path(j)) || fs::exists(child_path(j))) --to_run;
-  double spent = 0;
-  std::size_t finished = 0;
-  const auto t_start = Clock::now();
-  std::map<std::size_t, Clock::time_point> started;
+    for (std::size_t i = 0; i < jobs.size(); ++i) to_run[i] = !job_done(options, jobs[i]);
+  const SuiteEstimator estimator(SuiteEstimator::default_folders(options.out));
+  return estimator.price(cfg, jobs, to_run, group_by_structure(jobs), shared_builds, data_folder(options).string());
+}
 
-  // Writes a job's result with its identity, and reports it.
-  auto record = [&](std::size_t i, json result) {
-    const JobPlan& j = jobs[i];
-    result["job"]["id"] = j.id;
-    result["job"]["mesh"]["name"] = j.mesh.name;
-    result["job"]["suite"] = cfg.name;
-    write_json_atomic(result_path(j), result);
-    std::remove(child_path(j).c_str());
-    done.push_back(result);
-    summary_rows[j.id] = result;
+namespace {
+
+/// One invocation of `bvhbench suite`: the jobs, grouped by structure, each group's jobs made
+/// ready (query set, oracle) and handed to the executor, each result recorded as it ends.
+class SuiteRun {
+ public:
+  SuiteRun(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,
+           JobExecutor& executor)
+      : cfg_(cfg), jobs_(jobs), options_(options), executor_(executor), out_(options.out),
+        limits_{cfg.timeout_s, cfg.memory_limit_mb},
+        data_(data_folder(options).string(), (out_ / "logs").string(), self_exe(), limits_, cfg.truth) {
+    for (auto& j : cfg_.jobs) {
+      json r;
+      if (read_result_file(result_path(options_, j), &r)) summary_rows_[j.id] = r;
+    }
+  }
+
+  SuiteRunSummary run() {
+    announce();
+    const std::vector<BuildGroup> groups = group_by_structure(jobs_);
+    for (const BuildGroup& g : groups) {
+      if (interrupted() || stopped_) break;
+      submit_group(g);
+      stopped_ = !collect_ended();
+      while (!stopped_ && executor_.pending() >= executor_.slots()) stopped_ = !collect_one();
+    }
+    // What is still running: recorded as it ends (an interrupt drops what it stopped).
+    while (executor_.pending() > 0) collect_one();
     write_summary();
-    ++finished;
-    spent += seconds_since(started[i]);
-    started.erase(i);
-    // Jobs that run side by side (on several workers) overlap: then the rate is the wall clock's.
-    const double per_job = executor.slots() > 1 ? seconds_since(t_start) / double(finished) : spent / double(finished);
-    double left = per_job * double(to_run > finished ? to_run - finished : 0);
-    std::cerr << "[" << (i + 1) << "/" << jobs.size() << "] " << j.id << ": " << short_result(result)
-              << "  (elapsed " << format_seconds(seconds_since(t_start)) << ", left ~" << format_seconds(left) << ")\n";
-  };
-  // Records a job the executor finished; false when an interrupt stopped it.
-  auto record_finished = [&](JobFinished& f) {
-    if (!f.kept) {
-      std::remove(f.task.child_result_path.c_str());
-      return false;
-    }
-    record(f.task.index, std::move(f.result));
-    return true;
-  };
-  auto collect_one = [&] {
-    std::optional<JobFinished> f = executor.collect();
-    return f ? record_finished(*f) : true;
-  };
-  // Records, without waiting, the jobs that ended while this one was prepared.
-  auto collect_ended = [&] {
-    bool kept = true;
-    while (std::optional<JobFinished> f = executor.collect_ready()) kept = record_finished(*f) && kept;
-    return kept;
-  };
+    return finish();
+  }
 
-  bool stopped = false;
-  for (std::size_t i = 0; i < jobs.size() && !interrupted() && !stopped; ++i) {
-    const JobPlan& j = jobs[i];
-    json existing;
-    if (options.resume && read_result_file(result_path(j), &existing)) {
-      done.push_back(existing);
-      ++summary.resumed;
-      continue;
+ private:
+  /// The expected time, said first.
+  void announce() {
+    price_ = estimate_suite(cfg_, jobs_, options_, executor_.shares_builds());
+    expected_left_ = price_.total();
+    std::cerr << "suite " << cfg_.name << ": " << price_.describe() << ". The ETA after each job corrects it.\n";
+  }
+
+  /// The group's jobs that are not done, made ready and submitted together.
+  void submit_group(const BuildGroup& g) {
+    GroupTask group;
+    group.id = g.id;
+    group.plan_path = (out_ / "logs" / (g.id + ".plan.json")).string();
+    group.built_path = (out_ / "logs" / (g.id + ".built.json")).string();
+    for (std::size_t i : g.jobs) {
+      if (interrupted()) return;  // a query set or oracle cut short: not this job's failure
+      if (std::optional<JobTask> t = prepare(i)) group.jobs.push_back(std::move(*t));
     }
-    if (options.resume && read_result_file(child_path(j), &existing)) {
-      // The job finished but the runner was killed before recording it: adopt the result.
-      existing["job"]["id"] = j.id;
-      existing["job"]["mesh"]["name"] = j.mesh.name;
-      existing["job"]["suite"] = cfg.name;
-      write_json_atomic(result_path(j), existing);
-      std::remove(child_path(j).c_str());
-      summary_rows[j.id] = existing;
-      done.push_back(existing);
-      ++summary.resumed;
-      continue;
-    }
-    started[i] = Clock::now();
+    if (interrupted() || group.jobs.empty()) return;
+    for (const JobTask& t : group.jobs) started_[t.index] = Clock::now();
+    executor_.submit_group(std::move(group));
+  }
+
+  /// A job made ready to run; nullopt when it needs no run: resumed, or recorded at once (a
+  /// method this build left out, a query set that could not be made).
+  std::optional<JobTask> prepare(std::size_t i) {
+    const JobPlan& j = jobs_[i];
+    if (options_.resume && resume(i)) return std::nullopt;
+    started_[i] = Clock::now();
     JobTask task;
     task.index = i;
     task.plan = j;
     task.spec.mesh_path = j.mesh.path;
     task.spec.method = j.method;
     task.spec.query_type = j.query;
-    task.spec.repeat = cfg.repeat;
+    task.spec.repeat = cfg_.repeat;
     task.spec.threads = j.threads;
     if (!j.method.resolved()) {  // left out of this build (suite.cpp): nothing to run
       record(i, job_failure_row(task.spec, j, status::unsupported, j.method.problem));
-      continue;
+      return std::nullopt;
     }
-    const QuerySetFile qs = shared.queries(j);
-    if (interrupted()) break;  // the query set was cut short: not this job's failure
+    const QuerySetFile qs = data_.queries(j);
+    if (interrupted()) return std::nullopt;
     task.spec.queries_path = qs.path;
     if (qs.path.empty()) {
       record(i, query_set_failure_row(task.spec, j, qs.error));
-      continue;
+      return std::nullopt;
     }
-    task.spec.truth_path = shared.truth(j, qs.path);
-    if (interrupted()) break;
-    task.limits = limits;
-    task.child_result_path = child_path(j);
-    task.log_path = (logs / (j.id + ".log")).string();
-    std::remove(result_path(j).c_str());
+    task.spec.truth_path = data_.truth(j, qs.path);
+    if (interrupted()) return std::nullopt;
+    task.limits = limits_;
+    task.child_result_path = result_path(options_, j) + ".child";
+    task.log_path = (out_ / "logs" / (j.id + ".log")).string();
+    std::remove(result_path(options_, j).c_str());
     std::remove(task.child_result_path.c_str());
-    executor.submit(std::move(task));
-    stopped = !collect_ended();
-    while (!stopped && executor.pending() >= executor.slots()) stopped = !collect_one();
+    return task;
   }
-  // What is still running: recorded as it ends (an interrupt drops what it stopped).
-  while (executor.pending() > 0) collect_one();
-  write_summary();
 
-  summary.recorded = done.size();
-  summary.not_ok = std::size_t(std::count_if(done.begin(), done.end(), [](const json& r) { return r.value("status", "") != "ok"; }));
-  summary.interrupted = interrupted();
-  if (summary.interrupted)
-    std::cerr << "suite: interrupted; " << done.size() << " job(s) kept. Run again with --resume to finish.\n";
-  else
-    std::cerr << "suite " << cfg.name << ": " << done.size() << " job(s) (" << summary.resumed << " resumed), "
-              << summary.not_ok << " not ok; results in " << out.string() << "\n";
-  return summary;
+  /// --resume: true when job i is done (its result kept, or a finished child's adopted). A
+  /// `not_run` result is not done: the job runs again.
+  bool resume(std::size_t i) {
+    const JobPlan& j = jobs_[i];
+    json existing;
+    if (read_result_file(result_path(options_, j), &existing) && existing.value("status", "") != status::not_run) {
+      done_.push_back(existing);
+      ++summary_.resumed;
+      return true;
+    }
+    if (!read_result_file(result_path(options_, j) + ".child", &existing)) return false;
+    // The job finished but the runner was killed before recording it: adopt the result.
+    stamp(j, existing);
+    write_json_atomic(result_path(options_, j), existing);
+    std::remove((result_path(options_, j) + ".child").c_str());
+    summary_rows_[j.id] = existing;
+    done_.push_back(existing);
+    ++summary_.resumed;
+    return true;
+  }
+
+  void stamp(const JobPlan& j, json& result) const {
+    result["job"]["id"] = j.id;
+    result["job"]["mesh"]["name"] = j.mesh.name;
+    result["job"]["suite"] = cfg_.name;
+  }
+
+  /// Writes a job's result with its identity, and reports it with the time left.
+  void record(std::size_t i, json result) {
+    const JobPlan& j = jobs_[i];
+    stamp(j, result);
+    write_json_atomic(result_path(options_, j), result);
+    std::remove((result_path(options_, j) + ".child").c_str());
+    done_.push_back(result);
+    summary_rows_[j.id] = result;
+    write_summary();
+    const double took = started_.count(i) ? seconds_since(started_[i]) : 0.0;
+    const double own = result.value("elapsed_seconds", took);
+    started_.erase(i);
+    const double expected = i < price_.job_seconds.size() ? price_.job_seconds[i] : 0.0;
+    expected_done_ += expected;
+    expected_left_ = std::max(0.0, expected_left_ - expected);
+    actual_done_ += own;
+    // Jobs that run side by side (on several workers) overlap: then the rate is the wall clock's.
+    const double actual = executor_.slots() > 1 ? seconds_since(t_start_) : actual_done_;
+    const double left = time_left(expected_left_, expected_done_, actual);
+    std::cerr << "[" << done_.size() - summary_.resumed << "/" << price_.jobs << "] " << j.id << ": "
+              << short_result(result) << "  (elapsed " << format_seconds(seconds_since(t_start_)) << ", left ~"
+              << format_seconds(left) << ")\n";
+  }
+
+  /// Records a job the executor finished; false when an interrupt stopped it.
+  bool record_finished(JobFinished& f) {
+    if (!f.kept) {
+      std::remove(f.task.child_result_path.c_str());
+      return false;
+    }
+    record(f.task.index, std::move(f.result));
+    return true;
+  }
+  bool collect_one() {
+    std::optional<JobFinished> f = executor_.collect();
+    return f ? record_finished(*f) : true;
+  }
+  /// Records, without waiting, the jobs that ended while this one was prepared.
+  bool collect_ended() {
+    bool kept = true;
+    while (std::optional<JobFinished> f = executor_.collect_ready()) kept = record_finished(*f) && kept;
+    return kept;
+  }
+
+  void write_summary() {
+    std::vector<json> rows;
+    for (auto& j : cfg_.jobs) {
+      auto it = summary_rows_.find(j.id);
+      if (it != summary_rows_.end()) rows.push_back(it->second);
+    }
+    write_summary_csv((out_ / "summary.csv").string(), rows);
+  }
+
+  SuiteRunSummary finish() {
+    summary_.recorded = done_.size();
+    summary_.not_ok = std::size_t(
+        std::count_if(done_.begin(), done_.end(), [](const json& r) { return r.value("status", "") != "ok"; }));
+    summary_.interrupted = interrupted();
+    if (summary_.interrupted)
+      std::cerr << "suite: interrupted; " << done_.size() << " job(s) kept. Run again with --resume to finish.\n";
+    else
+      std::cerr << "suite " << cfg_.name << ": " << done_.size() << " job(s) (" << summary_.resumed << " resumed), "
+                << summary_.not_ok << " not ok in " << format_seconds(seconds_since(t_start_)) << " (expected ~"
+                << format_seconds(price_.total()) << "); results in " << out_.string() << "\n";
+    return summary_;
+  }
+
+  const SuiteConfig& cfg_;
+  const std::vector<JobPlan>& jobs_;
+  const SuiteRunOptions& options_;
+  JobExecutor& executor_;
+  const fs::path out_;
+  const ChildLimits limits_;
+  SuiteData data_;
+  SuitePrice price_;
+  double expected_left_ = 0, expected_done_ = 0, actual_done_ = 0;
+  const Clock::time_point t_start_ = Clock::now();
+  std::map<std::size_t, Clock::time_point> started_;
+  std::map<std::string, json> summary_rows_;
+  std::vector<json> done_;
+  SuiteRunSummary summary_;
+  bool stopped_ = false;
+};
+
+}  // namespace
+
+SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,
+                          JobExecutor& executor) {
+  const fs::path out = options.out;
+  fs::create_directories(out);
+  const FolderLock lock(out.string());  // one writer per results folder, until this returns
+  fs::create_directories(out / "runs");
+  fs::create_directories(out / "logs");
+  copy_suite_file(cfg.file, out / "suite.yml");
+  install_interrupt_handler();
+  SuiteRun run(cfg, jobs, options, executor);
+  return run.run();
 }
 
 }  // namespace bvhbench

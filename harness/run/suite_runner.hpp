@@ -1,13 +1,17 @@
 #pragma once
-/// The loop of `bvhbench suite`: each job of a suite handed to an executor (job_executor.hpp)
-/// once its query set and oracle are made (suite_data.hpp), its result written atomically to
+/// The loop of `bvhbench suite`: the jobs of each structure (build_groups.hpp) handed together to
+/// an executor (job_executor.hpp) once their query sets and oracles are made (suite_data.hpp),
+/// which runs them in one child with one build; each result written atomically to
 /// OUT/runs/ID.json with the job's identity, summary.csv rewritten after each, progress and a
-/// time-left estimate on stderr. With `resume`, a job whose result is there is skipped, and one
+/// time-left estimate on stderr. With `resume`, a job whose result is there is skipped (unless it
+/// is `not_run`: its group's child died before it), and one
 /// whose child finished but whose runner was killed before recording it (ID.json.child) is
 /// adopted. An interrupt (interrupt.hpp) keeps what finished and stops.
 ///
 /// Layout of OUT: suite.yml (a copy of the suite file), runs/ID.json, logs/ID.log (a job's
-/// output), logs/queries__*.log and logs/truth__*.log, summary.csv, data/ (the default cache), and
+/// output; the first job of a group's has the shared build's too), logs/GROUP.plan.json and
+/// logs/GROUP.built.json (a group's plan, and its child's word that the build is done),
+/// logs/queries__*.log and logs/truth__*.log, summary.csv, data/ (the default cache), and
 /// suite.lock while a run writes it (folder_lock.hpp).
 #include <cstddef>
 #include <string>
@@ -15,6 +19,7 @@
 
 #include "harness/run/job_executor.hpp"
 #include "harness/run/suite.hpp"
+#include "harness/run/suite_estimate.hpp"
 
 namespace bvhbench {
 
@@ -31,7 +36,22 @@ struct SuiteRunSummary {
   bool interrupted = false;
 };
 
-/// Runs `jobs` (a subset of cfg.jobs, in order) of the suite `cfg` with `executor`.
+/// OUT/runs/ID.json: where a job's result is recorded.
+std::string result_path(const SuiteRunOptions& options, const JobPlan& job);
+/// Whether --resume skips the job: its result is recorded (and is not `not_run`), or its child
+/// left one to adopt (ID.json.child).
+bool job_done(const SuiteRunOptions& options, const JobPlan& job);
+
+/// The expected time of `jobs` (with options.resume: of those not done), built once per
+/// structure when `shared_builds` (suite_estimate.hpp), learned from the results on disk.
+SuitePrice estimate_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,
+                          bool shared_builds);
+
+/// Runs `jobs` (a subset of cfg.jobs, in order) of the suite `cfg` with `executor`: grouped by
+/// structure (build_groups.hpp), each group's jobs submitted together (JobExecutor::submit_group),
+/// groups in the order of their first job. Says first how long it expects to take
+/// (estimate_suite) and, after each job, the time left, corrected by how the jobs so far
+/// compared with their price.
 /// summary.csv covers every job of cfg that has a result in OUT, in suite order, not only the
 /// ones run now. Throws InputError when a result cannot be written.
 SuiteRunSummary run_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const SuiteRunOptions& options,

@@ -414,6 +414,10 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   };
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
   m.sweep = {"", "coherent=true"};
+  // The KD-tree is built for distance jobs only: with it, a structure serves one query type.
+  m.sharing = [](const Params& p) {
+    return p.get_bool("kd_tree") ? StructureSharing::same_query_type : StructureSharing::every_job;
+  };
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     Options o;
     o.kernel = p.get("kernel");

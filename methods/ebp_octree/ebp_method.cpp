@@ -214,6 +214,11 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells
   // apart). No store: a suite has none to give.
   m.sweep = {"", "coherent=true"};
+  // Out of core, the page cache a job's passes fill would be the next job's warm start: a store
+  // is opened for each job (cheap). In memory the tree serves every job.
+  m.sharing = [](const Params& p) {
+    return p.get("store").empty() ? StructureSharing::every_job : StructureSharing::job_alone;
+  };
   m.create = [](const Params& p) -> std::unique_ptr<Method> {
     if (is_out_of_core(p)) return make_ebp_ooc_method(p);
     return std::make_unique<EbpOctreeMethod>(p);

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <sys/resource.h>
 #include <thread>
+#include <unistd.h>
 #include <vector>
 
 #include "harness/core/mesh.hpp"
@@ -21,8 +22,12 @@ class Fault final : public Method {
 
   void build(const Mesh& mesh, const BuildContext&) override {
     n_ = mesh.num_triangles();
+    ++builds_in_process;
     if (at_ == "build") trigger();
   }
+  /// Which process built it and how many builds that process made: a suite's tests check that
+  /// the jobs of one structure share one build (one process, one build).
+  nlohmann::json info() const override { return {{"pid", long(getpid())}, {"builds_in_process", builds_in_process}}; }
   bool inside(const Vec3d& p) override {
     if (at_ == "query") trigger();
     return p.x < 0;
@@ -63,6 +68,7 @@ class Fault final : public Method {
   }
   std::string mode_, at_;
   std::size_t n_ = 0;
+  static inline int builds_in_process = 0;
 };
 
 }  // namespace

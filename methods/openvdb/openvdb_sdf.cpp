@@ -492,6 +492,8 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       {"max_voxels", ParamType::integer, ParamRole::build, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
       {"fit", ParamType::boolean, ParamRole::build, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
   };
+  // The band (band=auto) and the dense-grid estimate are sized from the job's query points.
+  m.sharing = [](const Params&) { return StructureSharing::job_alone; };
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));
 }

@@ -106,14 +106,15 @@ def dask_suite(suite: Path, out: Path, *extra, timeout=300):
 
 def comparable(r):
     """What must not depend on the executor: the job (less the paths of files in OUT/data), its
-    status, counters, accuracy and structure (less its timings and allocation sizes)."""
+    status, counters, accuracy and structure (less its timings and allocation sizes, and the
+    process that built it: the fault method records its pid)."""
     job = json.loads(json.dumps(r["job"]))
     job.pop("truth", None)
     job["queries"].pop("path", None)
     accuracy = dict(r.get("accuracy") or {})
     accuracy.pop("truth", None)
     return {"job": job, "status": r["status"], "counters": r.get("counters"), "accuracy": accuracy,
-            "structure": {k: v for k, v in (r.get("structure") or {}).items() if "seconds" not in k and k != "bytes"}}
+            "structure": {k: v for k, v in (r.get("structure") or {}).items() if "seconds" not in k and k not in ("bytes", "pid")}}
 
 
 def small_suite(path: Path):

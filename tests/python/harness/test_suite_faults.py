@@ -116,7 +116,9 @@ def test_fault_at_query_time_and_distance_jobs(tmp_path):
     assert len(res) == 4
     for r in res.values():
         if r["job"]["method"] == "fault" or r["job"]["method_spec"].startswith("fault"):
-            assert r["status"] == "crash"
+            # One structure serves both fault jobs (one child): the first crashes, and the child
+            # with it, so the second is not run (test_suite_groups.py).
+            assert r["status"] == ("crash" if r["job"]["query"] == "inside" else "not_run")
         else:
             assert r["status"] == "ok"
             assert r["accuracy"] is not None

@@ -1,0 +1,105 @@
+// A suite's expected time (run/suite_estimate.hpp): priced by the mesh's triangles and the query
+// set's size from what has run, one build per structure.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "harness/run/run_job.hpp"
+#include "harness/run/suite_estimate.hpp"
+#include "support/test_support.hpp"
+
+using namespace bvhbench;
+using namespace bvhbench::test;
+
+namespace {
+
+/// A PLY header of `faces` faces (the estimate reads no further).
+void write_ply_header(const std::string& path, long faces) {
+  write_file_bytes(path, "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face " + std::to_string(faces) +
+                         "\nproperty list uchar int vertex_indices\nend_header\n");
+}
+
+SuiteConfig suite_on(TmpDir& d, const std::string& mesh, long n) {
+  write_file_bytes(d.file(mesh + ".yml"), "name: e\ntruth: false\nrepeat: 3\nmatrices:\n  - meshes: [" + mesh +
+                                              ".ply]\n    queries: [{kind: random, n: " + std::to_string(n) +
+                                              ", seed: 1}, {kind: haptic, n: " + std::to_string(n) +
+                                              ", seed: 1}]\n    query: [inside, distance]\n    methods: [ebp_octree]\n");
+  return load_suite(d.file(mesh + ".yml"));
+}
+
+SuitePrice price_of(const SuiteEstimator& e, const SuiteConfig& cfg, bool shared, const std::string& data) {
+  return e.price(cfg, cfg.jobs, std::vector<bool>(cfg.jobs.size(), true), group_by_structure(cfg.jobs), shared, data);
+}
+
+/// A finished ebp_octree job on `triangles` triangles: 1 s of build, 1e5 queries/s.
+void write_observation(const std::string& runs, double triangles) {
+  JobSpec spec;
+  nlohmann::json r = make_result(spec, status::ok, "");
+  r["job"]["method"] = "ebp_octree";
+  r["job"]["params_key"] = "";
+  r["job"]["query"] = "inside";
+  r["job"]["repetitions"] = 3;
+  r["job"]["mesh"]["triangles"] = triangles;
+  r["job"]["queries"]["kind"] = "random";
+  r["queries"] = {{"n", 1000}, {"throughput_qps", {{"median", 1e5}}}};
+  r["build"] = {{"seconds", 1.0}};
+  r["elapsed_seconds"] = 2.0;
+  std::filesystem::create_directories(runs);
+  write_json_atomic(runs + "/obs.json", r);
+}
+
+}  // namespace
+
+TEST(SuiteEstimate, TheTriangleCountComesFromTheHeaderTheManifestOrThePreset) {
+  TmpDir d;
+  write_ply_header(d.file("m.ply"), 123456);
+  EXPECT_EQ(mesh_triangles(d.file("m.ply")), 123456);
+  // Not made yet: the manifest beside it, else its preset's declared size.
+  write_file_bytes(d.file("manifest.json"), R"({"meshes": [{"file": "later.ply", "triangles": 777}]})");
+  EXPECT_EQ(mesh_triangles(d.file("later.ply")), 777);
+  EXPECT_EQ(mesh_triangles(d.file("paper/bunny_closed_32m.ply")), 32000000);
+  EXPECT_EQ(mesh_triangles(d.file("nowhere/unknown.ply")), 0);
+}
+
+TEST(SuiteEstimate, ATenTimesBiggerMeshOrQuerySetIsPricedHigher) {
+  TmpDir d;
+  write_ply_header(d.file("small.ply"), 100000);
+  write_ply_header(d.file("big.ply"), 1000000);
+  for (const bool observed : {false, true}) {
+    SCOPED_TRACE(observed ? "from an observation" : "from the defaults");
+    if (observed) write_observation(d.file("seen/runs"), 50000);
+    const SuiteEstimator e(observed ? std::vector<std::string>{d.file("seen")} : std::vector<std::string>{});
+    EXPECT_EQ(e.observations(), observed ? 1u : 0u);
+    const SuitePrice small = price_of(e, suite_on(d, "small", 1000), true, d.file("data"));
+    const SuitePrice big = price_of(e, suite_on(d, "big", 1000), true, d.file("data"));
+    const SuitePrice more = price_of(e, suite_on(d, "small", 10000), true, d.file("data"));
+    EXPECT_GT(big.total(), small.total() + 0.5);
+    // From an observed build (1 s at 50k triangles), ten times the triangles is over ten times the build.
+    if (observed) EXPECT_GT(big.total(), 3 * small.total());
+    EXPECT_GT(more.total(), small.total());
+    EXPECT_EQ(small.jobs, 4u);
+    // The observation is of inside queries: the distance jobs are priced at the median rates.
+    EXPECT_EQ(small.guessed, observed ? 2u : 4u);
+  }
+}
+
+TEST(SuiteEstimate, AStructureSharedByItsJobsIsBuiltOnce) {
+  TmpDir d;
+  write_ply_header(d.file("big.ply"), 5000000);
+  write_observation(d.file("seen/runs"), 5000000);
+  const SuiteEstimator e({d.file("seen")});
+  const SuiteConfig cfg = suite_on(d, "big", 1000);
+  const SuitePrice shared = price_of(e, cfg, true, d.file("data"));
+  const SuitePrice alone = price_of(e, cfg, false, d.file("data"));
+  EXPECT_EQ(shared.builds, 1u);
+  EXPECT_EQ(alone.builds, 4u);
+  // Three builds of 1 s (and three mesh loads) fewer.
+  EXPECT_GT(alone.total() - shared.total(), 3.0);
+}
+
+TEST(SuiteEstimate, TheTimeLeftFollowsHowTheFinishedJobsCompared) {
+  EXPECT_DOUBLE_EQ(time_left(100, 0, 0), 100);
+  EXPECT_DOUBLE_EQ(time_left(100, 10, 20), 200);  // twice as slow as priced
+  EXPECT_DOUBLE_EQ(time_left(100, 10, 5), 50);
+}
