@@ -37,10 +37,29 @@ std::string sweep_problem(const MethodInfo& m) {
   return "";
 }
 
+std::string inside_declaration_problem(const MethodInfo& m) {
+  auto declared = [&](const std::string& name) -> const ParamSpec* {
+    for (const ParamSpec& p : m.params)
+      if (p.name == name) return &p;
+    return nullptr;
+  };
+  for (const InsideVariant& v : m.inside) {
+    for (const auto& [key, value] : v.when)
+      if (!declared(key)) return "inside declaration: '" + key + "' is not an option of " + m.name;
+    if (v.threshold_option.empty()) continue;
+    const ParamSpec* t = declared(v.threshold_option);
+    if (!t || t->type != ParamType::real)
+      return "inside declaration: threshold option '" + v.threshold_option + "' is not a real option of " + m.name;
+  }
+  return "";
+}
+
 void Registry::add(MethodInfo info) {
   if (find(info.name)) throw std::logic_error("method registered twice: " + info.name);
   if (const std::string bad = sweep_problem(info); !bad.empty())
     throw std::logic_error("method " + info.name + ": sweep entry " + bad);
+  if (const std::string bad = inside_declaration_problem(info); !bad.empty())
+    throw std::logic_error("method " + info.name + ": " + bad);
   methods_.push_back(std::move(info));
 }
 

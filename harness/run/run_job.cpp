@@ -174,6 +174,8 @@ json run_job(const JobSpec& spec) {
     r["job"]["method"] = info->name;
     r["job"]["params"] = params.values();
     r["job"]["params_key"] = params.non_default_string();
+    const InsideDefinition inside = resolve_inside(info->inside, params);
+    r["job"]["inside"] = inside.to_json();  // what its inside means, judged below (accuracy.hpp)
     r["context"] = run_context();  // registration may have noted library versions
 
     QuerySet qs = load_query_set(spec.queries_path);
@@ -296,7 +298,7 @@ json run_job(const JobSpec& spec) {
 
     // ---- answers and accuracy -----------------------------------------------------------------
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
-    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256);
+    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256, inside, pts);
   } catch (const InputError& e) {
     fail(status::rejected_input, e.what());
   } catch (const UnsupportedError& e) {

@@ -224,6 +224,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
+  // The integer winding number by signed crossings from a reference point, inside iff w >= 1
+  // (DESIGN.md, "Inside"): built for closed, consistently oriented meshes.
+  m.inside = {{{}, {InsideRule::winding_number, false, 0.5, InputContract::closed_oriented}, ""}};
   // A store carries the build options it was made with (its header; the result records those):
   // one given beside it would be recorded as run but never used, so it is refused. The options
   // of the store's page cache mean nothing without one.

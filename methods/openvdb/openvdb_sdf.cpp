@@ -479,6 +479,10 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       {"max_voxels", ParamType::integer, ParamRole::build, "50000000", "budget of stored voxels (estimated before building; ~200 MB per grid)", {}, 1, 1e15},
       {"fit", ParamType::boolean, ParamRole::build, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
   };
+  // meshToVolume signs its field by flood-filling the outside from the box: what the flood
+  // cannot reach is inside, the union of the shells whatever their orientation, sampled at the
+  // voxel. It asks for a closed (watertight) mesh.
+  m.inside = {{{}, {InsideRule::nonzero_winding, true, 0.5, InputContract::closed}, ""}};
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));
 }
