@@ -49,11 +49,11 @@ def rule_text(name, threshold=None):
 
 
 def definition_text(job):
-    """The job's definition in words: "ray parity", "generalized winding number > 0.5
-    (approximate)", "definition not declared"."""
+    """The job's definition in words: "ray parity", "approximate generalized winding number >
+    0.5", "definition not declared"."""
     d = declared(job)
     text = rule_text(d["definition"], d.get("threshold"))
-    return text + (" (approximate)" if d.get("approximate") else "")
+    return ("approximate " if d.get("approximate") else "") + text
 
 
 def legend_suffix(job):
@@ -111,11 +111,22 @@ def dependent_points(jobs):
     return points, counts
 
 
+ORDER = ["ray_parity", "winding_number", "nonzero_winding", "generalized_winding_number"]
+
+
 def says_text(example):
-    """What each definition says at an example point: "ray parity: outside; winding number > 1/2:
+    """What the definitions say at an example point, grouped by answer: "ray parity says
+    outside; winding number > 1/2, nonzero winding number, generalized winding number say
     inside"."""
     says = example.get("says") or {}
-    return "; ".join(f"{rule_text(d)}: {'inside' if v else 'outside'}" for d, v in sorted(says.items()))
+    names = sorted(says, key=lambda d: (ORDER.index(d) if d in ORDER else len(ORDER), d))
+    parts = []
+    for answer in (False, True):
+        group = [rule_text(d) for d in names if bool(says[d]) == answer]
+        if group:
+            parts.append(f"{', '.join(group)} say{'s' if len(group) == 1 else ''} "
+                         f"{'inside' if answer else 'outside'}")
+    return "; ".join(parts)
 
 
 def point_text(example):

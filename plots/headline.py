@@ -18,7 +18,7 @@ to be so, apart from the wrong ones. Standard library only.
 import definitions
 import fmt
 import tables
-from metrics import METRICS
+from metrics import METRICS, pareto_front
 from results_io import config_label, is_batch, method_sort_key
 
 # A configuration wrong on at least this share of its checked jobs is approximate by design.
@@ -208,3 +208,37 @@ NOTE = ("Exact = checked against the oracle and within the report's tolerances i
         "(sweeps and path-coherent variants included); Python batch rows ([batch]: one call per "
         "query set) are left out of this table. The ratio divides the EBP-Octree's fastest exact "
         "rate by the fastest exact rate of any other method: above 1× the EBP-Octree is faster.")
+
+
+def open_scan_table(rs):
+    """(header, rows): on open scans, where the generalized winding number is the one definition
+    of inside, the methods that compute it (judged against it, within their contract), speed
+    against accuracy: per scan and query path, each configuration's rate and its wrong-answer
+    rate away from the surface, the Pareto-optimal ones marked. Methods for closed input are
+    outside their contract there (the stability matrix shows them)."""
+    header = ["Open scan", "Path", "Method (definition)", "Rate", "Wrong far from the surface",
+              "Pareto-optimal"]
+    groups = {}
+    for j in rs.jobs:
+        if (j.ok and j.has_accuracy and j.query == "inside" and j.threads == 1
+                and definitions.judged_against(j) == "generalized_winding_number"
+                and j.get("accuracy.definitions") == ["generalized_winding_number"]
+                and not definitions.outside_contract(j) and j.qps):
+            groups.setdefault((j.mesh, j.kind), []).append(j)
+    rows = []
+    for (mesh, kind), jobs in sorted(groups.items()):
+        points = [(METRICS["inside_wrong_rate_far"].getter(j) or 0.0, j.qps, j.id) for j in jobs]
+        front = {p[2] for p in pareto_front(points, "lower", "higher")}
+        for j in sorted(jobs, key=lambda j: -j.qps):
+            rows.append([mesh, kind, f"{config_label(j.config, j.params_key)} "
+                         f"({definitions.definition_text(j)})", fmt.hz(j.qps),
+                         fmt.sci(METRICS["inside_wrong_rate_far"].getter(j) or 0.0),
+                         "yes" if j.id in front else ""])
+    return header, rows
+
+
+OPEN_SCAN_NOTE = ("On an open scan only the generalized winding number defines inside (the oracle's: "
+                  "an exact integer part and a double-precision sum over the boundary edges, inside "
+                  "iff w > 1/2): the methods that compute it, exactly or approximately, are rated on "
+                  "it. Rates are median queries per second, one thread; Pareto-optimal: no other "
+                  "row of the scan and path is both faster and at least as accurate.")

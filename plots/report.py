@@ -129,6 +129,10 @@ def _first_screen(rs, drawn, paper_md):
     for name in FIRST_CHARTS:
         if name in charts.CHARTS:
             md += _chart_md(name, drawn, rs)
+    h, rows = headline.open_scan_table(rs)
+    if rows:
+        md += ["## Open scans: speed against accuracy (generalized winding number)", "",
+               tables.render_md(h, rows), headline.OPEN_SCAN_NOTE, ""]
     if any(j.ok for j in rs.model_jobs()):
         md += ["## The paper's tables", "", paper_md]
     return md

@@ -64,7 +64,8 @@ def test_accuracy_lines_name_each_definition_and_the_definition_dependent_point(
     dep = [l for l in lines if "definition-dependent" in l]
     assert len(dep) == 1 and dep[0].startswith("- cow: 2 definition-dependent point(s)")
     assert "(0.25, -0.5, 0.125), winding number 2" in dep[0]
-    assert "ray parity: outside" in dep[0] and "winding number > 1/2: inside" in dep[0]
+    assert ("ray parity says outside; winding number > 1/2, nonzero winding number, generalized "
+            "winding number say inside") in dep[0]
 
 
 def test_a_method_wrong_by_its_own_definition_is_still_unexpected():
@@ -126,3 +127,21 @@ def test_the_matrix_separates_wrong_definition_dependent_and_outside_contract(tm
     md = (root / "stability_matrix.md").read_text()
     assert "ok, definition-dependent · def-dep 14%" in md
     assert "outside contract · in 8%" in md and "**wrong** · def-dep 14% · in 0.5%" in md
+
+
+def test_open_scans_rate_the_generalized_winding_number_methods():
+    def scan(method, inside, qps, wrong, within=True, judged=None):
+        r = result(method, "bunny_open", inside, wrong=wrong, within=within, judged=judged)
+        r["accuracy"]["definitions"] = ["generalized_winding_number"]
+        r["queries"]["throughput_qps"]["median"] = qps
+        return r
+    fast = dict(GWN, approximate=True)
+    rs = result_set([scan("brute_force", GWN, 1e3, 0), scan("gpytoolbox", fast, 1e6, 4),
+                     scan("point_cloud_utils", fast, 1e5, 9),
+                     scan("cgal_aabb", PARITY, 1e7, 50, within=False, judged="oracle_default")])
+    h, rows = headline.open_scan_table(rs)
+    by = {r[2].split(" ")[0]: r for r in rows}
+    assert set(by) == {"brute_force", "gpytoolbox", "point_cloud_utils"}  # not the one outside its contract
+    assert [r[2].split(" ")[0] for r in rows] == ["gpytoolbox", "point_cloud_utils", "brute_force"]
+    assert by["gpytoolbox"][5] == "yes" and by["brute_force"][5] == "yes" and by["point_cloud_utils"][5] == ""
+    assert "(approximate generalized winding number > 0.5)" in by["gpytoolbox"][2]
