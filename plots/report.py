@@ -27,6 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import charts  # noqa: E402
+import definitions  # noqa: E402
 import headline  # noqa: E402
 import html_report  # noqa: E402
 import reproduction  # noqa: E402
@@ -138,6 +139,34 @@ def _first_screen(rs, drawn, paper_md):
     return md
 
 
+def _appendix_md(rs, ctx, warn_h, warn_rows, unchecked):
+    """Every ok job beyond the tolerances under its method's own definition, those run on input
+    outside the method's contract apart (not failures), and the jobs without an oracle."""
+    if not warn_rows and not unchecked:
+        return []
+    by_id = {j.id: j for j in rs.ok_jobs}
+    outside = [r for r in warn_rows if r[-1] in by_id and definitions.outside_contract(by_id[r[-1]])]
+    wrong = [r for r in warn_rows if r not in outside]
+    md = ["## Appendix: accuracy, job by job", ""]
+    if wrong:
+        md += [f"{len(wrong)} job(s) finished `ok` with answers beyond the tolerances "
+               f"(inside: wrong far from the surface; distance: error above "
+               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
+               "answer), each judged against its method's own definition of inside. Their "
+               "speed figures are not comparable to exact methods'.", "",
+               ctx, "", tables.render_md(warn_h, wrong)]
+    if outside:
+        md += [f"{len(outside)} job(s) ran on input outside their method's contract (a mesh it "
+               "does not promise to handle: the stability matrix says why), judged against the "
+               "oracle's definition where the mesh does not define the method's own; not "
+               "failures.", "", tables.render_md(warn_h, outside)]
+    if unchecked:
+        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
+               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
+               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
+    return md
+
+
 def build_markdown(rs, drawn, paper_md):
     """The report: first what a reader came for (_first_screen), then every other chart and
     table, the job-by-job accuracy table in an appendix. Sections with nothing to show are left
@@ -168,20 +197,7 @@ def build_markdown(rs, drawn, paper_md):
         md += [f"Jobs listed in summary.csv without a result file: "
                + ", ".join(f"`{j}`" for j in rs.summary_only) + ".", ""]
 
-    if warn_rows or unchecked:
-        md += ["## Appendix: accuracy, job by job", ""]
-    if warn_rows:
-        md += [f"{len(warn_rows)} job(s) finished `ok` with answers beyond the tolerances "
-               f"(inside: wrong far from the surface; distance: error above "
-               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
-               "answer), each judged against its method's own definition of inside. Their "
-               "speed figures are not comparable to exact methods'.", "",
-               ctx, "", tables.render_md(warn_h, warn_rows)]
-    if unchecked:
-        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
-               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
-               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
-
+    md += _appendix_md(rs, ctx, warn_h, warn_rows, unchecked)
     md += not_drawn_md(drawn)
     md += ["## Machine and run", ""]
     h, rows = tables.context_table(rs)

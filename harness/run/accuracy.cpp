@@ -58,17 +58,6 @@ json error_stats(std::vector<double> v) {
   return {{"max", v.back()}, {"p99", v[i99]}, {"mean", sum / double(v.size())}};
 }
 
-const NpyArray& need(const std::map<std::string, NpyArray>& t, const std::string& path,
-                     const std::string& key, const std::string& dtype, std::size_t n,
-                     std::size_t cols) {
-  return oracle_array(t, path, key, dtype, n, cols);
-}
-
-/// A NumPy unicode array's first string; "" if absent or not unicode.
-std::string unicode_string(const std::map<std::string, NpyArray>& t, const std::string& key) {
-  auto d = t.find(key);
-  return d == t.end() ? std::string() : d->second.unicode_value(0);
-}
 
 bool finite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -136,12 +125,12 @@ namespace {
 /// Throws when the oracle file names another query set or mesh than the job's.
 void check_oracle_belongs(const std::map<std::string, NpyArray>& t, const std::string& truth_path,
                           const std::string& queries_sha256, const std::string& mesh_sha256) {
-  const std::string truth_qsha = unicode_string(t, "queries_sha256");
+  const std::string truth_qsha = oracle_string(t, "queries_sha256");
   if (!queries_sha256.empty() && !truth_qsha.empty() && truth_qsha != queries_sha256)
     throw file_error(truth_path, "oracle was computed for another query set (queries_sha256 " +
                                      truth_qsha.substr(0, 16) + "..., this query set is " +
                                      queries_sha256.substr(0, 16) + "...); recompute it with bvhbench truth");
-  const std::string truth_msha = unicode_string(t, "mesh_sha256");
+  const std::string truth_msha = oracle_string(t, "mesh_sha256");
   if (!mesh_sha256.empty() && !truth_msha.empty() && truth_msha != mesh_sha256)
     throw file_error(truth_path, "oracle was computed for another mesh (mesh_sha256 " + truth_msha.substr(0, 16) +
                                      "..., this mesh is " + mesh_sha256.substr(0, 16) +
@@ -185,16 +174,16 @@ void distance_block(json& acc, const Answers& ans, const Judge& judge, const std
   const std::size_t n = judge.n;
   std::size_t near = 0;
   for (std::size_t i = 0; i < n; ++i) near += std::abs(td[i]) < near_thr;
-  const std::int64_t* tt = need(t, truth_path, "triangle", "<i8", n, 1).as<std::int64_t>();
-  const std::int64_t* ties = t.count("tie_count") ? need(t, truth_path, "tie_count", "<i8", n, 1).as<std::int64_t>() : nullptr;
+  const std::int64_t* tt = oracle_array(t, truth_path, "triangle", "<i8", n, 1).as<std::int64_t>();
+  const std::int64_t* ties = t.count("tie_count") ? oracle_array(t, truth_path, "tie_count", "<i8", n, 1).as<std::int64_t>() : nullptr;
   std::size_t max_tied = 0;
   const std::int64_t* tied = nullptr;
   if (t.count("tied_triangles") && t.at("tied_triangles").shape.size() == 2) {
     max_tied = t.at("tied_triangles").shape[1];
-    tied = need(t, truth_path, "tied_triangles", "<i8", n, max_tied).as<std::int64_t>();
+    tied = oracle_array(t, truth_path, "tied_triangles", "<i8", n, max_tied).as<std::int64_t>();
   }
-  const double* tc = t.count("closest") ? need(t, truth_path, "closest", "<f8", n, 3).as<double>() : nullptr;
-  const double* tn = t.count("normal") ? need(t, truth_path, "normal", "<f8", n, 3).as<double>() : nullptr;
+  const double* tc = t.count("closest") ? oracle_array(t, truth_path, "closest", "<f8", n, 3).as<double>() : nullptr;
+  const double* tn = t.count("normal") ? oracle_array(t, truth_path, "normal", "<f8", n, 3).as<double>() : nullptr;
 
   std::vector<double> abs_err, rel_err, angle, closest_err;
   abs_err.reserve(n);
@@ -275,10 +264,10 @@ json compute_accuracy(const Answers& ans, const std::string& truth_path, double 
   json acc;
   acc["truth"] = truth_path;
   acc["near_surface_threshold"] = near_thr;
-  const std::string definition = unicode_string(t, "definition");
+  const std::string definition = oracle_string(t, "definition");
   acc["definition"] = definition.empty() ? "unknown" : definition;
 
-  const double* td = need(t, truth_path, "distance", "<f8", n, 1).as<double>();
+  const double* td = oracle_array(t, truth_path, "distance", "<f8", n, 1).as<double>();
   const InsideTruths truths(t, truth_path, n);
   std::size_t near = 0;
   for (std::size_t i = 0; i < n; ++i) near += std::abs(td[i]) < near_thr;

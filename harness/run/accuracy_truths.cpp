@@ -19,12 +19,12 @@ const NpyArray& oracle_array(const std::map<std::string, NpyArray>& t, const std
   return a;
 }
 
-namespace {
-
-std::string unicode_of(const std::map<std::string, NpyArray>& t, const std::string& key) {
+std::string oracle_string(const std::map<std::string, NpyArray>& t, const std::string& key) {
   auto d = t.find(key);
   return d == t.end() ? std::string() : d->second.unicode_value(0);
 }
+
+namespace {
 
 std::optional<std::int64_t> count_of(const std::map<std::string, NpyArray>& t, const std::string& path,
                                      const std::string& key) {
@@ -48,14 +48,14 @@ std::vector<std::string> split_commas(const std::string& s) {
 
 InsideTruths::InsideTruths(const std::map<std::string, NpyArray>& t, const std::string& path, std::size_t n)
     : n_(n) {
-  default_definition_ = unicode_of(t, "definition");
+  default_definition_ = oracle_string(t, "definition");
   default_inside_ = oracle_array(t, path, "inside", "|b1", n, 1).as<std::uint8_t>();
   if (t.count("winding")) winding_ = oracle_array(t, path, "winding", "<f8", n, 1).as<double>();
   boundary_edges_ = count_of(t, path, "boundary_edges").value_or(0);
   odd_edges_ = count_of(t, path, "odd_edges");
   nonmanifold_edges_ = count_of(t, path, "nonmanifold_edges");
   if (t.count("definitions")) {
-    defined_ = split_commas(unicode_of(t, "definitions"));
+    defined_ = split_commas(oracle_string(t, "definitions"));
   } else if (winding_) {  // an oracle file from before: what its winding number implies
     if (default_definition_ == "exact") defined_ = {"ray_parity", "winding_number", "nonzero_winding"};
     defined_.push_back("generalized_winding_number");

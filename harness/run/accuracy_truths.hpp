@@ -21,6 +21,9 @@ namespace bvhbench {
 const NpyArray& oracle_array(const std::map<std::string, NpyArray>& t, const std::string& path,
                              const std::string& key, const std::string& dtype, std::size_t n, std::size_t cols);
 
+/// String array `key` of an oracle file (its first element), "" when absent or not a string.
+std::string oracle_string(const std::map<std::string, NpyArray>& t, const std::string& key);
+
 class InsideTruths {
  public:
   /// Reads the arrays of oracle file `path` (already opened as `t`, which must outlive this) for
