@@ -182,18 +182,28 @@ void Oracle::find_boundary() {
   // triangles give 90M edges.
   const auto& F = mesh_.triangles;
   const std::uint64_t V = mesh_.vertices.size();
-  std::vector<std::uint64_t> fwd, bwd;
+  // The edges of zero-area triangles again, apart (few): such a triangle is never crossed and
+  // has no solid angle, so the edge counts that decide which definitions of inside hold
+  // (odd_edges_, nonmanifold_edges_, solid_boundary_edges_) leave it out.
+  std::vector<std::uint64_t> fwd, bwd, flat_fwd, flat_bwd;
   fwd.reserve(F.size() * 3 / 2 + 16);
   bwd.reserve(F.size() * 3 / 2 + 16);
-  for (const auto& t : F)
+  const auto& X = mesh_.vertices;
+  for (const auto& t : F) {
+    const bool flat = collinear_exact(X[t[0]], X[t[1]], X[t[2]]);
     for (int k = 0; k < 3; ++k) {
       std::uint64_t u = t[k], v = t[(k + 1) % 3];
       if (u < v) fwd.push_back(u * V + v);
       else if (v < u) bwd.push_back(v * V + u);
+      if (flat && u < v) flat_fwd.push_back(u * V + v);
+      else if (flat && v < u) flat_bwd.push_back(v * V + u);
     }
+  }
   tbb::parallel_invoke([&] { tbb::parallel_sort(fwd.begin(), fwd.end()); },
                        [&] { tbb::parallel_sort(bwd.begin(), bwd.end()); });
-  std::size_t i = 0, j = 0;
+  std::sort(flat_fwd.begin(), flat_fwd.end());
+  std::sort(flat_bwd.begin(), flat_bwd.end());
+  std::size_t i = 0, j = 0, fi = 0, fj = 0;
   auto add = [&](std::uint64_t key, long net) {
     std::uint64_t a = key / V, b = key % V;
     if (net < 0) std::swap(a, b), net = -net;
@@ -205,6 +215,9 @@ void Oracle::find_boundary() {
     while (i < fwd.size() && fwd[i] == key) ++net, ++uses, ++i;
     while (j < bwd.size() && bwd[j] == key) --net, ++uses, ++j;
     if (net != 0) add(key, net);
+    while (fi < flat_fwd.size() && flat_fwd[fi] == key) --net, --uses, ++fi;
+    while (fj < flat_bwd.size() && flat_bwd[fj] == key) ++net, --uses, ++fj;
+    solid_boundary_edges_ += std::size_t(std::abs(net));
     odd_edges_ += uses % 2;
     nonmanifold_edges_ += uses > 2;
   }
@@ -284,7 +297,7 @@ void Oracle::build_bvh(bool verbose) {
 std::vector<std::string> Oracle::definitions() const {
   std::vector<std::string> d;
   if (odd_edges_ == 0) d.push_back("ray_parity");
-  if (closed()) {
+  if (solid_boundary_edges_ == 0) {
     d.push_back("winding_number");
     d.push_back("nonzero_winding");
   }
@@ -438,6 +451,7 @@ OracleAnswers Oracle::answer(const std::vector<Vec3d>& pts) const {
   a.definition = closed() ? "exact" : "winding_number";
   a.definitions = definitions();
   a.odd_edges = odd_edges_;
+  a.solid_boundary_edges = solid_boundary_edges_;
   a.nonmanifold_edges = nonmanifold_edges_;
   a.parity.resize(n);
   a.tie_tolerance = tie_tol_;

@@ -65,7 +65,7 @@ struct OracleAnswers {
   std::vector<std::int64_t> triangle, tie_count, tied;  ///< tied: N * kMaxTied, row-major
   double tie_tolerance = 0;
   std::size_t boundary_edges = 0;
-  std::size_t odd_edges = 0, nonmanifold_edges = 0;  ///< Oracle's counts of the mesh's edges
+  std::size_t odd_edges = 0, nonmanifold_edges = 0, solid_boundary_edges = 0;  ///< Oracle's edge counts
 };
 
 class Oracle {
@@ -83,14 +83,18 @@ class Oracle {
   /// oriented surface, non-manifold allowed): the `exact` definition applies.
   bool closed() const { return boundary_.empty(); }
   std::size_t boundary_edge_count() const { return boundary_.size(); }
+  /// The edge counts below leave zero-area triangles out (never crossed, no solid angle).
   /// Undirected edges used by an odd number of triangles: 0 when the mesh is closed (mod 2), so
   /// that every ray's crossing count has the same parity.
   std::size_t odd_edge_count() const { return odd_edges_; }
   /// Undirected edges used by more than two triangles.
   std::size_t nonmanifold_edge_count() const { return nonmanifold_edges_; }
+  /// Boundary edges counted with their orientation (as boundary_edge_count()): 0 when the mesh
+  /// is closed and consistently oriented, so that w is an integer wherever it is defined.
+  std::size_t solid_boundary_edge_count() const { return solid_boundary_edges_; }
   /// The definitions of inside defined on this mesh (inside_definition.hpp's names): ray_parity
-  /// when closed (mod 2), winding_number and nonzero_winding when closed(), and
-  /// generalized_winding_number always.
+  /// when odd_edge_count() is 0, winding_number and nonzero_winding when
+  /// solid_boundary_edge_count() is 0, and generalized_winding_number always.
   std::vector<std::string> definitions() const;
   double diagonal() const { return diagonal_; }
   double tie_tolerance() const { return tie_tol_; }
@@ -130,7 +134,7 @@ class Oracle {
 
   const Mesh& mesh_;
   double diagonal_ = 0, tie_tol_ = 0;
-  std::size_t odd_edges_ = 0, nonmanifold_edges_ = 0;
+  std::size_t odd_edges_ = 0, nonmanifold_edges_ = 0, solid_boundary_edges_ = 0;
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> prims_;
   std::vector<std::array<Vec3d, 2>> boundary_;  ///< boundary edges u->v, with multiplicity

@@ -27,6 +27,7 @@ void write_oracle_npz(const std::string& path, const OracleAnswers& a, const std
   z["parity"] = NpyArray::b1(a.parity);
   z["odd_edges"] = NpyArray::i8({std::int64_t(a.odd_edges)});
   z["nonmanifold_edges"] = NpyArray::i8({std::int64_t(a.nonmanifold_edges)});
+  z["solid_boundary_edges"] = NpyArray::i8({std::int64_t(a.solid_boundary_edges)});
   std::string defined;
   for (const std::string& d : a.definitions) defined += (defined.empty() ? "" : ",") + d;
   z["definitions"] = NpyArray::unicode(defined);

@@ -118,10 +118,6 @@ struct Judge {
   }
 };
 
-}  // namespace
-
-namespace {
-
 /// Throws when the oracle file names another query set or mesh than the job's.
 void check_oracle_belongs(const std::map<std::string, NpyArray>& t, const std::string& truth_path,
                           const std::string& queries_sha256, const std::string& mesh_sha256) {

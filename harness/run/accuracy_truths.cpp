@@ -51,7 +51,8 @@ InsideTruths::InsideTruths(const std::map<std::string, NpyArray>& t, const std::
   default_definition_ = oracle_string(t, "definition");
   default_inside_ = oracle_array(t, path, "inside", "|b1", n, 1).as<std::uint8_t>();
   if (t.count("winding")) winding_ = oracle_array(t, path, "winding", "<f8", n, 1).as<double>();
-  boundary_edges_ = count_of(t, path, "boundary_edges").value_or(0);
+  // Zero-area triangles left out where the oracle counted so (solid_boundary_edges).
+  boundary_edges_ = count_of(t, path, "solid_boundary_edges").value_or(count_of(t, path, "boundary_edges").value_or(0));
   odd_edges_ = count_of(t, path, "odd_edges");
   nonmanifold_edges_ = count_of(t, path, "nonmanifold_edges");
   if (t.count("definitions")) {
@@ -67,7 +68,7 @@ InsideTruths::InsideTruths(const std::map<std::string, NpyArray>& t, const std::
     parity_.assign(p, p + n);
   } else if (is_defined(InsideRule::ray_parity)) {  // closed: the parity of the integer winding number
     parity_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) parity_[i] = std::fmod(std::abs(winding_[i]), 2.0) == 1.0;
+    for (std::size_t i = 0; i < n; ++i) parity_[i] = std::fmod(std::abs(std::round(winding_[i])), 2.0) == 1.0;
   }
 }
 
@@ -81,7 +82,9 @@ bool InsideTruths::rule_says(InsideRule r, double threshold, std::size_t i) cons
   switch (r) {
     case InsideRule::ray_parity: return parity_[i] != 0;
     case InsideRule::winding_number: return winding_[i] > 0.5;
-    case InsideRule::nonzero_winding: return winding_[i] != 0.0;
+    // w is an integer where this is defined, but for a rounding residue of the strips of
+    // zero-area triangles' edges: |w| > 1/2 is w != 0 without it.
+    case InsideRule::nonzero_winding: return std::abs(winding_[i]) > 0.5;
     case InsideRule::generalized_winding_number: return winding_[i] > threshold;
     default: return default_inside_[i] != 0;
   }
@@ -131,7 +134,10 @@ std::string InsideTruths::contract_problem(InputContract c) const {
   if (c == InputContract::closed_oriented_manifold || !winding_) return "";
   // Embedded and outward: w is 0 or 1 wherever it is; a query point elsewhere is a witness.
   std::size_t witnesses = 0;
-  for (std::size_t i = 0; i < n_; ++i) witnesses += winding_[i] != 0.0 && winding_[i] != 1.0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    const double w = std::round(winding_[i]);
+    witnesses += w != 0.0 && w != 1.0;
+  }
   if (witnesses)
     return std::to_string(witnesses) + " query point(s) with a winding number other than 0 or 1: "
            "self-intersecting or inside out";

@@ -480,9 +480,10 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
       {"fit", ParamType::boolean, ParamRole::build, "true", "over max_voxels: coarsen the voxel until the field fits (false: refuse)", {}},
   };
   // meshToVolume signs its field by flood-filling the outside from the box: what the flood
-  // cannot reach is inside, the union of the shells whatever their orientation, sampled at the
-  // voxel. It asks for a closed (watertight) mesh.
-  m.inside = {{{}, {InsideRule::nonzero_winding, true, 0.5, InputContract::closed}, ""}};
+  // cannot reach is inside, the union of the shells, sampled at the voxel. It asks for a
+  // watertight mesh; on one not consistently oriented (a flipped patch) the nonzero winding
+  // number is not defined, so its contract asks for that too.
+  m.inside = {{{}, {InsideRule::nonzero_winding, true, 0.5, InputContract::closed_oriented}, ""}};
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));
 }
