@@ -17,6 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
 
+import definitions
 import fmt
 import headline
 import metrics
@@ -186,7 +187,8 @@ def _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles):
         ys = [p[1][2] for p in s.points]
         ax.plot(xs, ys, color=c, marker=mk, markersize=6, linewidth=1.5, linestyle=ls,
                 markerfacecolor=face, zorder=z, alpha=0.9)
-        label = _series_label(method, s)
+        # Which inside it computes (plots/definitions.py): the sign of a distance follows it.
+        label = _series_label(method, s) + definitions.legend_suffix(s.points[0][1][0])
         handles.setdefault((method_sort_key(method), s.variant, s.knobs), Line2D(
             [], [], color=c, marker=mk, linestyle=ls, markerfacecolor=face, markersize=6,
             label=label))

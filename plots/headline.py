@@ -8,11 +8,17 @@ by what it did in this run, and a new method needs nothing here.
 A method configuration is *approximate by design* when most of its checked jobs answered wrongly
 (a sampled field, a fast winding number: its error is systematic), and *unexpectedly wrong* when
 it is right on most of them and wrong on a few: a method meant to be exact that failed somewhere,
-which the report names loudly. Standard library only.
+which the report names loudly.
+
+Each method is judged against its own definition of inside (plots/definitions.py): its line names
+that definition, a point where the mesh's definitions disagree (overlapping shells, |w| > 1) is
+shown apart and never counts as wrong, and a job on input outside the method's contract is said
+to be so, apart from the wrong ones. Standard library only.
 """
+import definitions
 import fmt
 import tables
-from metrics import METRICS
+from metrics import METRICS, pareto_front
 from results_io import config_label, is_batch, method_sort_key
 
 # A configuration wrong on at least this share of its checked jobs is approximate by design.
@@ -24,14 +30,17 @@ def _checked(jobs):
 
 
 def config_accuracy(rs):
-    """{(method, params_key): {"checked": n, "wrong": [jobs], "approximate": bool}} over the
-    single-thread jobs on regular models."""
+    """{(method, params_key): {"checked": n, "wrong": [jobs], "outside": [jobs], "approximate":
+    bool, "definition": text}} over the single-thread jobs on regular models: `wrong` the jobs
+    beyond the tolerances under the method's own definition, `outside` those beyond them on input
+    outside the method's contract (not counted wrong)."""
     out = {}
     for j in _checked(rs.model_jobs()):
-        c = out.setdefault((j.method, j.params_key), {"checked": 0, "wrong": []})
+        c = out.setdefault((j.method, j.params_key), {"checked": 0, "wrong": [], "outside": [],
+                                                       "definition": definitions.definition_text(j)})
         c["checked"] += 1
         if tables.accuracy_problems(j):
-            c["wrong"].append(j)
+            c["outside" if definitions.outside_contract(j) else "wrong"].append(j)
     for c in out.values():
         c["approximate"] = bool(c["wrong"]) and len(c["wrong"]) >= SYSTEMATIC_SHARE * c["checked"]
     return out
@@ -61,14 +70,55 @@ def _worst_text(jobs):
     return "; ".join(parts) or "wrong signs or non-finite answers"
 
 
+def _definition_label(m, cfgs):
+    """"cgal_aabb (ray parity)"; a method whose configurations differ names each one's; results
+    made before declarations name none, as then."""
+    texts = {c["definition"] for c in cfgs.values()}
+    if texts == {definitions.RULE_WORDS["undeclared"]}:
+        return m
+    if len(texts) == 1:
+        return f"{m} ({texts.pop()})"
+    return f"{m} (" + "; ".join(f"`{k or 'defaults'}`: {c['definition']}"
+                               for k, c in sorted(cfgs.items())) + ")"
+
+
+def _outside_text(m, cfgs):
+    jobs = [j for c in cfgs.values() for j in c["outside"]]
+    if not jobs:
+        return None
+    meshes = sorted({f"{j.mesh} ({definitions.contract_problem(j)})" for j in jobs})
+    return (f"- {m}: outside its contract ({definitions.contract_text(jobs[0])}) on "
+            f"{len(jobs)} job(s), not counted wrong: {', '.join(meshes)}.")
+
+
+def dependent_lines(rs):
+    """One bullet per regular model with points where its definitions of inside disagree: how
+    many, where, what each definition says. Never counted wrong for a method that follows its
+    own definition."""
+    points, counts = definitions.dependent_points(_checked(rs.model_jobs()))
+    lines = []
+    for mesh in sorted({m for m, _ in counts}):
+        n = sum(c for (m, _), c in counts.items() if m == mesh)
+        shown = list(points.get(mesh, {}).values())[:3]
+        where = "; ".join(f"at {definitions.point_text(e)} ({e['kind']} queries): "
+                          f"{definitions.says_text(e)}" for e in shown)
+        lines.append(f"- {mesh}: {n} definition-dependent point(s), where the definitions of "
+                     f"inside disagree (each method is judged by its own there, never counted "
+                     f"wrong){': ' + where if where else ''}.")
+    return lines
+
+
 def accuracy_lines(rs):
-    """One Markdown bullet per method: exact, approximate by design (with its worst error), or
-    unexpectedly wrong (bold, with the jobs' count; the appendix lists them)."""
+    """One Markdown bullet per method, naming its definition of inside: exact, approximate by
+    design (with its worst error), unexpectedly wrong under its own definition (bold, with the
+    jobs' count; the appendix lists them), or outside its contract; then the models'
+    definition-dependent points."""
     acc = config_accuracy(rs)
     methods = sorted({m for m, _ in acc}, key=method_sort_key)
     lines = []
     for m in methods:
         cfgs = {k: c for (mm, k), c in acc.items() if mm == m}
+        label = _definition_label(m, cfgs)
         checked = sum(c["checked"] for c in cfgs.values())
         approx = {k: c for k, c in cfgs.items() if c["approximate"]}
         unexpected = {k: c for k, c in cfgs.items() if c["wrong"] and not c["approximate"]}
@@ -77,7 +127,7 @@ def accuracy_lines(rs):
             n = sum(len(c["wrong"]) for c in unexpected.values())
             names = ", ".join(f"`{config_label(m + (':' + k if k else ''), k)}`"
                               for k in sorted(unexpected))
-            lines.append(f"- **\u26a0 {m}: UNEXPECTED wrong answers in {n} of {checked} checked "
+            lines.append(f"- **\u26a0 {label}: UNEXPECTED wrong answers in {n} of {checked} checked "
                          f"jobs** ({names}; right on most of its other jobs): "
                          f"{_worst_text([j for c in unexpected.values() for j in c['wrong']])}. "
                          "See the appendix's job-by-job table.")
@@ -85,14 +135,21 @@ def accuracy_lines(rs):
             wrong = [j for c in approx.values() for j in c["wrong"]]
             names = ", ".join(f"`{k or 'defaults'}`" for k in sorted(approx))
             every = len(approx) == len(cfgs)
-            lines.append(f"- {m}: approximate by design ({'every configuration' if every else names}; "
+            lines.append(f"- {label}: approximate by design ({'every configuration' if every else names}; "
                          f"wrong in {len(wrong)} of {sum(c['checked'] for c in approx.values())} "
                          f"jobs): {_worst_text(wrong)}."
                          + ("" if every else " Its other configurations are exact here."))
+        outside = _outside_text(m, cfgs)
+        if outside:
+            lines.append(outside)
         if not unexpected and not approx:
-            lines.append(f"- {m}: exact on all {checked} checked jobs"
+            exact = checked - sum(len(c["outside"]) for c in cfgs.values())
+            lines.append(f"- {label}: exact on "
+                         + (f"all {checked}" if exact == checked else f"{exact} of {checked}")
+                         + " checked jobs"
                          + (f" (distance error at most {fmt.sci(worst_exact)} of the diagonal)"
                             if worst_exact else "") + ".")
+    lines += dependent_lines(rs)
     unchecked = len([j for j in rs.model_jobs() if j.ok and not j.has_accuracy])
     if not methods:
         lines.append("- No ok job on a regular model was checked against the oracle"
@@ -151,3 +208,37 @@ NOTE = ("Exact = checked against the oracle and within the report's tolerances i
         "(sweeps and path-coherent variants included); Python batch rows ([batch]: one call per "
         "query set) are left out of this table. The ratio divides the EBP-Octree's fastest exact "
         "rate by the fastest exact rate of any other method: above 1× the EBP-Octree is faster.")
+
+
+def open_scan_table(rs):
+    """(header, rows): on open scans, where the generalized winding number is the one definition
+    of inside, the methods that compute it (judged against it, within their contract), speed
+    against accuracy: per scan and query path, each configuration's rate and its wrong-answer
+    rate away from the surface, the Pareto-optimal ones marked. Methods for closed input are
+    outside their contract there (the stability matrix shows them)."""
+    header = ["Open scan", "Path", "Method (definition)", "Rate", "Wrong far from the surface",
+              "Pareto-optimal"]
+    groups = {}
+    for j in rs.jobs:
+        if (j.ok and j.has_accuracy and j.query == "inside" and j.threads == 1
+                and definitions.judged_against(j) == "generalized_winding_number"
+                and j.get("accuracy.definitions") == ["generalized_winding_number"]
+                and not definitions.outside_contract(j) and j.qps):
+            groups.setdefault((j.mesh, j.kind), []).append(j)
+    rows = []
+    for (mesh, kind), jobs in sorted(groups.items()):
+        points = [(METRICS["inside_wrong_rate_far"].getter(j) or 0.0, j.qps, j.id) for j in jobs]
+        front = {p[2] for p in pareto_front(points, "lower", "higher")}
+        for j in sorted(jobs, key=lambda j: -j.qps):
+            rows.append([mesh, kind, f"{config_label(j.config, j.params_key)} "
+                         f"({definitions.definition_text(j)})", fmt.hz(j.qps),
+                         fmt.sci(METRICS["inside_wrong_rate_far"].getter(j) or 0.0),
+                         "yes" if j.id in front else ""])
+    return header, rows
+
+
+OPEN_SCAN_NOTE = ("On an open scan only the generalized winding number defines inside (the oracle's: "
+                  "an exact integer part and a double-precision sum over the boundary edges, inside "
+                  "iff w > 1/2): the methods that compute it, exactly or approximately, are rated on "
+                  "it. Rates are median queries per second, one thread; Pareto-optimal: no other "
+                  "row of the scan and path is both faster and at least as accurate.")

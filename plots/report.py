@@ -27,6 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import charts  # noqa: E402
+import definitions  # noqa: E402
 import headline  # noqa: E402
 import html_report  # noqa: E402
 import reproduction  # noqa: E402
@@ -65,14 +66,15 @@ FIRST_CHARTS = ("pareto_inside_wrong_rate", "pareto_distance_rel_err_p99")
 
 
 def _chart_md(name, drawn, rs):
+    """A chart's section; none for a chart with nothing to draw (not_drawn_md lists those)."""
     chart = charts.CHARTS[name]
     state, detail = drawn[name]
+    if state == "nodata":
+        return []
     md = [f"## {chart.title}", ""]
     if state == "ok":
         png, svg = detail
         md += [f"![{chart.title}]({png})", "", chart.caption + f" ([SVG]({svg}))", ""]
-    elif state == "nodata":
-        md += [f"_Not drawn: {detail}._", ""]
     else:
         md += [f"**Chart failed to draw:** `{detail}`", ""]
     if name == "stability_matrix" and state == "ok":
@@ -82,10 +84,93 @@ def _chart_md(name, drawn, rs):
     return md
 
 
+def not_drawn_md(drawn):
+    """One list, at the end, of the charts left out for having nothing to draw, with why."""
+    missing = [(charts.CHARTS[n].title, detail) for n, (state, detail) in drawn.items()
+               if state == "nodata"]
+    if not missing:
+        return []
+    return (["## Charts with nothing to show", ""]
+            + [f"- {title}: _Not drawn: {detail}._" for title, detail in missing] + [""])
+
+
+def _accuracy_md(rs):
+    """Each method's accuracy line, the models' definition-dependent points and the tolerances;
+    nothing when no job on a regular model was checked (a stability run: its matrix says it)."""
+    lines = headline.accuracy_lines(rs)
+    if not headline.config_accuracy(rs) and rs.stress_meshes:
+        return []
+    return (["## Accuracy, per method", ""] + lines + [""]
+            + [f"Each method is judged against its own definition of inside (`bvhbench methods` "
+               f"lists them): inside answers wrong by it far from the surface (beyond 1e-6 of "
+               f"the diagonal) count as wrong; distances beyond {tables.DIST_REL_ERR_TOL:g} of "
+               "the diagonal, with a wrong sign by it or non-finite, too. Points where the "
+               "mesh's definitions disagree are counted apart, never wrong. Every job: the "
+               "appendix \"Accuracy, job by job\".", ""])
+
+
+def _matrix_first(rs):
+    """A stability run (every mesh a stress case) opens with its matrix: nothing else answers."""
+    return (rs.is_stability_suite() and set(rs.meshes()) <= set(rs.stress_meshes)
+            and "stability_matrix" in charts.CHARTS)
+
+
+def _first_screen(rs, drawn, paper_md):
+    """What a reader came for: a stability run's matrix; else the fastest exact method per model
+    and query with the EBP-Octree's ratio to it, each method's accuracy in a line, the
+    speed/accuracy charts and the paper's tables. Sections with nothing to show are left out."""
+    md = []
+    if _matrix_first(rs):
+        md += _chart_md("stability_matrix", drawn, rs)
+    h, rows = headline.headline_table(rs)
+    if rows:
+        md += ["## Fastest exact method per model and query", "",
+               tables.render_md(h, rows), headline.NOTE, ""]
+    md += _accuracy_md(rs)
+    for name in FIRST_CHARTS:
+        if name in charts.CHARTS:
+            md += _chart_md(name, drawn, rs)
+    h, rows = headline.open_scan_table(rs)
+    if rows:
+        md += ["## Open scans: speed against accuracy (generalized winding number)", "",
+               tables.render_md(h, rows), headline.OPEN_SCAN_NOTE, ""]
+    if any(j.ok for j in rs.model_jobs()):
+        md += ["## The paper's tables", "", paper_md]
+    return md
+
+
+def _appendix_md(rs, ctx, warn_h, warn_rows, unchecked):
+    """Every ok job beyond the tolerances under its method's own definition, those run on input
+    outside the method's contract apart (not failures), and the jobs without an oracle."""
+    if not warn_rows and not unchecked:
+        return []
+    by_id = {j.id: j for j in rs.ok_jobs}
+    outside = [r for r in warn_rows if r[-1] in by_id and definitions.outside_contract(by_id[r[-1]])]
+    wrong = [r for r in warn_rows if r not in outside]
+    md = ["## Appendix: accuracy, job by job", ""]
+    if wrong:
+        md += [f"{len(wrong)} job(s) finished `ok` with answers beyond the tolerances "
+               f"(inside: wrong far from the surface; distance: error above "
+               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
+               "answer), each judged against its method's own definition of inside. Their "
+               "speed figures are not comparable to exact methods'.", "",
+               ctx, "", tables.render_md(warn_h, wrong)]
+    if outside:
+        md += [f"{len(outside)} job(s) ran on input outside their method's contract (a mesh it "
+               "does not promise to handle: the stability matrix says why), judged against the "
+               "oracle's definition where the mesh does not define the method's own; not "
+               "failures.", "", tables.render_md(warn_h, outside)]
+    if unchecked:
+        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
+               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
+               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
+    return md
+
+
 def build_markdown(rs, drawn, paper_md):
-    """The report: first what a reader came for (the fastest exact method per model and query,
-    the EBP-Octree's ratio to it, each method's accuracy in a line, the speed/accuracy Pareto
-    charts), then every other chart and table, the job-by-job accuracy table in an appendix."""
+    """The report: first what a reader came for (_first_screen), then every other chart and
+    table, the job-by-job accuracy table in an appendix. Sections with nothing to show are left
+    out (the charts among them are listed at the end, with why)."""
     ctx = tables.context_line(rs)
     warn_h, warn_rows, unchecked = tables.accuracy_warnings(rs)
     failed_h, failed_rows = tables.failed_table(rs)
@@ -94,35 +179,17 @@ def build_markdown(rs, drawn, paper_md):
           ctx, "",
           f"{len(rs.jobs)} jobs: {n_ok} ok, {len(failed_rows)} not ok"
           + (f", {len(warn_rows)} ok jobs with answers beyond the tolerances "
-             "(approximate methods among them; see Accuracy)" if warn_rows else "")
+             "(approximate methods and input outside a method's contract among them; see "
+             "Accuracy)" if warn_rows else "")
           + (f", {len(unchecked)} ok jobs without an oracle" if unchecked else "") + ".", ""]
-
-    h, rows = headline.headline_table(rs)
-    md += ["## Fastest exact method per model and query", ""]
-    md += ([tables.render_md(h, rows), headline.NOTE, ""] if rows else
-           ["_No job was checked exact against the oracle: nothing to rank._", ""])
-
-    md += ["## Accuracy, per method", ""] + headline.accuracy_lines(rs) + [""]
-    md += [f"Tolerances: inside answers wrong far from the surface (beyond 1e-6 of the "
-           f"diagonal) count as wrong; distances beyond {tables.DIST_REL_ERR_TOL:g} of the "
-           "diagonal, with a wrong sign or non-finite, too. Every job: the appendix "
-           "\"Accuracy, job by job\".", ""]
-
-    for name in FIRST_CHARTS:
-        if name in charts.CHARTS:
-            md += _chart_md(name, drawn, rs)
-
-    md += ["## The paper's tables", "", paper_md]
-
+    md += _first_screen(rs, drawn, paper_md)
+    first = {"stability_matrix"} if _matrix_first(rs) else set()
     for name in charts.CHARTS:
-        if name not in FIRST_CHARTS:
+        if name not in FIRST_CHARTS and name not in first:
             md += _chart_md(name, drawn, rs)
 
-    md += ["## Jobs that did not finish ok", ""]
     if failed_rows:
-        md += [ctx, "", tables.render_md(failed_h, failed_rows)]
-    else:
-        md += ["None.", ""]
+        md += ["## Jobs that did not finish ok", "", ctx, "", tables.render_md(failed_h, failed_rows)]
     if rs.unreadable:
         md += ["Unreadable result files (not counted above):", ""]
         md += [f"- `{f}`: {why}" for f, why in rs.unreadable] + [""]
@@ -130,20 +197,8 @@ def build_markdown(rs, drawn, paper_md):
         md += [f"Jobs listed in summary.csv without a result file: "
                + ", ".join(f"`{j}`" for j in rs.summary_only) + ".", ""]
 
-    md += ["## Appendix: accuracy, job by job", ""]
-    if warn_rows:
-        md += [f"{len(warn_rows)} job(s) finished `ok` with answers beyond the tolerances "
-               f"(inside: wrong far from the surface; distance: error above "
-               f"{tables.DIST_REL_ERR_TOL:g} of the diagonal, a wrong sign or a non-finite "
-               "answer). Their speed figures are not comparable to exact methods'.", "",
-               ctx, "", tables.render_md(warn_h, warn_rows)]
-    else:
-        md += ["None: every ok job checked against the oracle is within tolerance.", ""]
-    if unchecked:
-        md += [f"Not checked (no oracle): {len(unchecked)} ok job(s): "
-               + ", ".join(f"`{j.id}`" for j in unchecked[:20])
-               + (" ..." if len(unchecked) > 20 else "") + ".", ""]
-
+    md += _appendix_md(rs, ctx, warn_h, warn_rows, unchecked)
+    md += not_drawn_md(drawn)
     md += ["## Machine and run", ""]
     h, rows = tables.context_table(rs)
     md += [tables.render_md(h, rows)]

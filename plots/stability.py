@@ -14,11 +14,19 @@ cope with this mesh"; a method that copes with uniform points but not with point
 does not. Inside and distance stay apart: they fail differently (on an open scan, inside has no
 well-defined answer while distance still has one), and a method may support only one of them.
 
-- `status`: the worst of its jobs' statuses in SEVERITY order, where an `ok` job counts as
-  `ok_wrong` when its answers break the report's accuracy tolerances (tables.accuracy_problems:
-  a wrong inside answer away from the surface, a distance error above 1e-5 of the diagonal, a
-  wrong sign, a non-finite distance) and as `unchecked` when it ran without an oracle; any status
-  the harness does not define counts as `error`. `missing`: the suite ran no such job.
+- `status`: the worst of its jobs' statuses in SEVERITY order, where an `ok` job with an oracle
+  is judged against its method's own definition of inside (plots/definitions.py) and counts as
+  - `ok_wrong` when its answers break the report's accuracy tolerances under that definition
+    (tables.accuracy_problems: a wrong inside answer away from the surface, a distance error
+    above 1e-5 of the diagonal, a wrong sign, a non-finite distance) on input within its
+    contract: a failure;
+  - `outside_contract` when the mesh is input the method does not promise to handle (an open
+    scan for a ray-parity method, a flipped patch for one built for oriented meshes), whatever it
+    answered: what it answered is shown beside it, never as a failure;
+  - `definition_dependent` when it is right under its own definition and the mesh has points
+    where the definitions disagree (overlapping shells, an inverted mesh): how many is shown;
+  - `ok` otherwise, and `unchecked` when it ran without an oracle;
+  any status the harness does not define counts as `error`. `missing`: the suite ran no such job.
 - `jobs`, `jobs_ok` (status `ok`, whatever their accuracy), `statuses`: each status the jobs
   recorded with its count, worst first (`timeout:1 ok:2`).
 - Accuracy, over the `ok` jobs that have an oracle (`accuracy_jobs` of them), each the worst over
@@ -45,6 +53,7 @@ import io
 import os
 from collections import Counter
 
+import definitions
 import fmt
 import tables
 from metrics import METRICS
@@ -55,14 +64,18 @@ QUERIES = ("inside", "distance")
 # Worse statuses win when several jobs fall in one cell. `unsupported` is the mildest: a method
 # that says it does not answer is honest; `rejected_input` is below the wrong answers because
 # refusing a mesh (the empty one must be refused) at least says so.
-SEVERITY = ["missing", "not_run", "unsupported", "ok", "unchecked", "rejected_input", "ok_wrong", "error",
-            "timeout", "oom", "crash"]
+# A definition-dependent cell is right (by the method's own definition); a cell outside the
+# contract is not a failure either, but says less than an ok one.
+SEVERITY = ["missing", "not_run", "unsupported", "ok", "definition_dependent", "unchecked", "outside_contract",
+            "rejected_input", "ok_wrong", "error", "timeout", "oom", "crash"]
 
 CSV_COLUMNS = [
     "query", "method", "mesh", "status", "jobs", "jobs_ok", "statuses",
     "inside_wrong_rate_max", "inside_wrong_rate_far_max", "inside_wrong_max",
     "dist_abs_err_max", "dist_rel_err_max", "dist_rel_err_p99_max", "sign_wrong", "non_finite",
     "normal_err_p99_deg_max", "triangle_agreement_min", "accuracy_jobs", "message",
+    "definition", "judged_against", "definition_dependent_max", "definition_dependent_rate_max",
+    "contract_problem",
 ]
 
 
@@ -78,7 +91,16 @@ def job_status(job):
         return recorded_status(job.status)
     if not job.has_accuracy:
         return "unchecked"
-    return "ok_wrong" if tables.accuracy_problems(job) else "ok"
+    if definitions.outside_contract(job):
+        return "outside_contract"
+    if tables.accuracy_problems(job):
+        return "ok_wrong"
+    return "definition_dependent" if definitions.dependent_count(job) else "ok"
+
+
+def _dependent_rate(job):
+    n = job.n_queries
+    return definitions.dependent_count(job) / n if n else None
 
 
 def worst(statuses):
@@ -127,6 +149,12 @@ def aggregate(jobs):
             (j.num("accuracy.distance.triangle_agreement") for j in dist), pick=min),
         "accuracy_jobs": len(acc),
         "message": "; ".join(sorted({j.message for j in jobs if not j.ok and j.message})),
+        "definition": "; ".join(sorted({definitions.definition_text(j) for j in jobs})),
+        "judged_against": " ".join(sorted({definitions.judged_against(j) for j in acc})),
+        "definition_dependent_max": _worst_value(definitions.dependent_count(j) for j in acc),
+        "definition_dependent_rate_max": _worst_value(_dependent_rate(j) for j in acc),
+        "contract_problem": "; ".join(sorted({definitions.contract_problem(j) for j in acc
+                                              if definitions.outside_contract(j)})),
     }
 
 
@@ -174,14 +202,17 @@ def headline(query, cell):
 
 _SHORT = {"unsupported": "n/a", "rejected_input": "rejected", "unchecked": "ok?", "missing": "",
           "timeout": "timeout", "crash": "CRASH", "oom": "OOM", "error": "error"}
+# Statuses whose cells still show their numbers: the method ran and was measured.
+MEASURED = ("ok", "ok_wrong", "definition_dependent", "outside_contract")
 
 
 def short_text(query, cell):
     """A few characters for a chart cell: the headline number of ok cells, else the status."""
     st = cell["status"]
-    if st in ("ok", "ok_wrong"):
+    if st in MEASURED:
         v = headline(query, cell)
-        return fmt.sci(v, 1) if v is not None else "ok"
+        text = fmt.sci(v, 1) if v is not None else "ok"
+        return {"outside_contract": "out: ", "definition_dependent": "def: "}.get(st, "") + text
     return _SHORT.get(st, st)
 
 
@@ -200,11 +231,14 @@ def md_text(query, cell):
     st = cell["status"]
     if st == "missing":
         return "—"
-    text = {"ok": "ok", "unchecked": "ok (no oracle)", "ok_wrong": "**wrong**"}.get(st,
-                                                                                  f"**{st}**")
+    text = {"ok": "ok", "unchecked": "ok (no oracle)", "ok_wrong": "**wrong**",
+            "definition_dependent": "ok, definition-dependent",
+            "outside_contract": "outside contract"}.get(st, f"**{st}**")
     if st != "ok" and cell["jobs"] > 1:
         text += f" {cell['status_jobs']}/{cell['jobs']}"
     parts = []
+    if cell["definition_dependent_rate_max"]:
+        parts.append("def-dep " + _pct(cell["definition_dependent_rate_max"]))
     if query == "inside":
         if cell["inside_wrong_rate_far_max"] is not None:
             parts.append("in " + _pct(cell["inside_wrong_rate_far_max"]))
@@ -245,13 +279,21 @@ def to_csv(m):
 
 
 LEGEND = ("Each cell: one method configuration on one case for one query type, over every query "
-          "kind the suite ran there. The status is the worst of its jobs' (`wrong` = finished ok "
-          "but beyond the accuracy tolerances; a count says how many of the cell's jobs had it), "
+          "kind the suite ran there, judged against the method's own definition of inside (ray "
+          "parity, the winding number, the generalized winding number: `bvhbench methods` lists "
+          "each method's). The status is the worst of its jobs' (`wrong` = finished ok but beyond "
+          "the accuracy tolerances under its own definition, on input within its contract; "
+          "`outside contract` = run on input it does not promise to handle, its answers shown "
+          "against the oracle's definition but not counted as a failure; `definition-dependent` = "
+          "right under its own definition on a mesh where the definitions disagree, `def-dep` "
+          "saying on how many of the points; a count says how many of the cell's jobs had it), "
           "then, over the ok jobs: `in` = worst inside error rate among points farther than 1e-6 "
           "of the diagonal from the surface (the CSV also has the rate over all points), `d` = "
           "worst distance error / mesh diagonal, `sign` = distances with the wrong sign, `NaN` = "
-          "non-finite distances. The oracle is exact on closed meshes and the generalized "
-          "winding number (> 1/2) on open or broken ones. `—` = not run.")
+          "non-finite distances. Where a method's definition is not defined on the mesh (ray "
+          "parity on an open scan) it is judged against the oracle's default: the integer winding "
+          "number (nonzero) on closed meshes, the generalized winding number (|w| > 1/2) on open "
+          "or broken ones. `—` = not run.")
 
 
 def matrix_md(m):

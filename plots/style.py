@@ -54,6 +54,8 @@ def method_marker(method):
 STATUS_COLORS = {
     "ok": "#4daf4a",
     "ok_wrong": "#ffd92f",
+    "definition_dependent": "#a6d96a",  # right by its own definition where definitions disagree
+    "outside_contract": "#c6dbef",      # input it does not promise to handle
     "unchecked": "#b8e0b0",       # ok but no oracle: nothing known about its answers
     "unsupported": "#d9d9d9",
     "rejected_input": "#80b1d3",
@@ -67,6 +69,8 @@ STATUS_COLORS = {
 STATUS_LABELS = {
     "ok": "ok",
     "ok_wrong": "ok, wrong answers",
+    "definition_dependent": "ok, definition-dependent",
+    "outside_contract": "outside its contract",
     "unchecked": "ok, no oracle",
     "unsupported": "unsupported",
     "rejected_input": "rejected input",

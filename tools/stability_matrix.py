@@ -9,7 +9,11 @@ RESULTS_DIR):
 - stability_matrix.csv: one row per (query type, method configuration, case) that has jobs:
   the worst status and every status with its count, and over the ok jobs the worst inside error
   rates (all points, away from the surface), distance errors, sign errors, non-finite answers,
-  normal error and the lowest closest-triangle agreement;
+  normal error and the lowest closest-triangle agreement, each judged against the method's own
+  definition of inside; the definition, what it was judged against, the share of
+  definition-dependent points and why the case is outside the method's contract. A cell's
+  status keeps apart `ok_wrong` (wrong by its own definition, inside its contract),
+  `definition_dependent` (right by it, where the definitions disagree) and `outside_contract`;
 - stability_matrix.md: the same as one table per query type, configurations x cases.
 
 The aggregation, and what a cell means, is plots/stability.py, which the report's stability

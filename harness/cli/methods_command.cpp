@@ -28,11 +28,31 @@ nlohmann::json method_json(const MethodInfo& m) {
                        : m.caps.build_threads == BuildThreads::one ? "one"
                                                                    : "library";
   j["testing_only"] = m.testing_only;
+  // What its inside means, per configuration (inside_definition.hpp); [] when undeclared.
+  j["inside"] = declaration_json(m.inside);
   j["params"] = params_json("method " + m.name, m.params);
   j["sweep"] = m.sweep;  // what a suite's `methods: all` runs of it
   // Counters compare gates exactly only against a baseline of the same machine fingerprint.
   j["machine_dependent_counters"] = m.machine_dependent_counters;
   return j;
+}
+
+/// "  inside: ray parity; input: closed\n", one line per configuration that differs.
+std::string inside_lines(const MethodInfo& m) {
+  if (m.inside.empty()) return "  inside: not declared (judged against the oracle's default definition)\n";
+  std::string out;
+  for (const InsideVariant& v : m.inside) {
+    std::string when;
+    for (const auto& [k, value] : v.when) when += (when.empty() ? "" : ",") + k + "=" + value;
+    std::string text = v.definition.text();
+    if (!v.threshold_option.empty()) {
+      const std::size_t at = text.find(" > ");
+      const std::size_t end = text.find_first_of(" ;", at + 3);
+      if (at != std::string::npos) text.replace(at + 3, end - at - 3, v.threshold_option);
+    }
+    out += "  inside" + (when.empty() ? std::string() : " (" + when + ")") + ": " + text + "\n";
+  }
+  return out;
 }
 
 }  // namespace
@@ -74,6 +94,7 @@ void add_methods_command(CLI::App& app) {
                     : m.caps.build_threads == BuildThreads::one ? "one"
                                                                 : "the library's own choice")
                 << "\n";
+      std::cout << inside_lines(m);
       std::string machine;
       for (auto& c : m.machine_dependent_counters) machine += (machine.empty() ? "" : ", ") + c;
       std::cout << "  machine-dependent counters: "

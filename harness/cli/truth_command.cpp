@@ -59,6 +59,9 @@ void add_truth_command(CLI::App& app) {
     auto t3 = Clock::now();
     write_oracle_npz(o->out, a, mesh.sha256, qsha);
     auto sec = [](auto d) { return std::chrono::duration<double>(d).count(); };
+    std::string defined;
+    for (const std::string& d : a.definitions) defined += (defined.empty() ? "" : ", ") + d;
+    if (verbose) std::cerr << "truth: definitions of inside defined on this mesh: " << defined << "\n";
     if (verbose)
       std::cerr << "truth: " << pts.size() << " queries on " << mesh.num_triangles() << " triangles ("
                 << a.definition << "), " << threads << " thread(s): load " << sec(t1 - t0) << " s, build "

@@ -182,18 +182,28 @@ void Oracle::find_boundary() {
   // triangles give 90M edges.
   const auto& F = mesh_.triangles;
   const std::uint64_t V = mesh_.vertices.size();
-  std::vector<std::uint64_t> fwd, bwd;
+  // The edges of zero-area triangles again, apart (few): such a triangle is never crossed and
+  // has no solid angle, so the edge counts that decide which definitions of inside hold
+  // (odd_edges_, nonmanifold_edges_, solid_boundary_edges_) leave it out.
+  std::vector<std::uint64_t> fwd, bwd, flat_fwd, flat_bwd;
   fwd.reserve(F.size() * 3 / 2 + 16);
   bwd.reserve(F.size() * 3 / 2 + 16);
-  for (const auto& t : F)
+  const auto& X = mesh_.vertices;
+  for (const auto& t : F) {
+    const bool flat = collinear_exact(X[t[0]], X[t[1]], X[t[2]]);
     for (int k = 0; k < 3; ++k) {
       std::uint64_t u = t[k], v = t[(k + 1) % 3];
       if (u < v) fwd.push_back(u * V + v);
       else if (v < u) bwd.push_back(v * V + u);
+      if (flat && u < v) flat_fwd.push_back(u * V + v);
+      else if (flat && v < u) flat_bwd.push_back(v * V + u);
     }
+  }
   tbb::parallel_invoke([&] { tbb::parallel_sort(fwd.begin(), fwd.end()); },
                        [&] { tbb::parallel_sort(bwd.begin(), bwd.end()); });
-  std::size_t i = 0, j = 0;
+  std::sort(flat_fwd.begin(), flat_fwd.end());
+  std::sort(flat_bwd.begin(), flat_bwd.end());
+  std::size_t i = 0, j = 0, fi = 0, fj = 0;
   auto add = [&](std::uint64_t key, long net) {
     std::uint64_t a = key / V, b = key % V;
     if (net < 0) std::swap(a, b), net = -net;
@@ -201,10 +211,15 @@ void Oracle::find_boundary() {
   };
   while (i < fwd.size() || j < bwd.size()) {
     std::uint64_t key = std::min(i < fwd.size() ? fwd[i] : ~0ull, j < bwd.size() ? bwd[j] : ~0ull);
-    long net = 0;
-    while (i < fwd.size() && fwd[i] == key) ++net, ++i;
-    while (j < bwd.size() && bwd[j] == key) --net, ++j;
+    long net = 0, uses = 0;
+    while (i < fwd.size() && fwd[i] == key) ++net, ++uses, ++i;
+    while (j < bwd.size() && bwd[j] == key) --net, ++uses, ++j;
     if (net != 0) add(key, net);
+    while (fi < flat_fwd.size() && flat_fwd[fi] == key) --net, --uses, ++fi;
+    while (fj < flat_bwd.size() && flat_bwd[fj] == key) ++net, --uses, ++fj;
+    solid_boundary_edges_ += std::size_t(std::abs(net));
+    odd_edges_ += uses % 2;
+    nonmanifold_edges_ += uses > 2;
   }
 }
 
@@ -279,10 +294,22 @@ void Oracle::build_bvh(bool verbose) {
 // ---------------------------------------------------------------------------------------------
 // Queries
 // ---------------------------------------------------------------------------------------------
-long Oracle::crossings(const Vec3d& p) const {
+std::vector<std::string> Oracle::definitions() const {
+  std::vector<std::string> d;
+  if (odd_edges_ == 0) d.push_back("ray_parity");
+  if (solid_boundary_edges_ == 0) {
+    d.push_back("winding_number");
+    d.push_back("nonzero_winding");
+  }
+  d.push_back("generalized_winding_number");
+  return d;
+}
+
+Oracle::RayCrossings Oracle::ray_crossings(const Vec3d& p) const {
   const auto& F = mesh_.triangles;
   const auto& X = mesh_.vertices;
   long total = 0;
+  bool odd = false;
   std::uint32_t stack[128];
   int sp = 0;
   stack[sp++] = 0;
@@ -302,14 +329,18 @@ long Oracle::crossings(const Vec3d& p) const {
       if (std::max({a.x, b.x, c.x}) < p.x) continue;
       if (std::min({a.y, b.y, c.y}) > p.y || std::max({a.y, b.y, c.y}) < p.y) continue;
       if (std::min({a.z, b.z, c.z}) > p.z || std::max({a.z, b.z, c.z}) < p.z) continue;
-      total += crossing(p, a, b, c);
+      const int sign = crossing(p, a, b, c);
+      total += sign;
+      odd ^= sign != 0;
     }
   }
-  return total;
+  return {total, odd};
 }
 
-double Oracle::winding(const Vec3d& p) const {
-  double w = double(crossings(p));
+double Oracle::winding(const Vec3d& p) const { return winding_from(p, crossings(p)); }
+
+double Oracle::winding_from(const Vec3d& p, long net_crossings) const {
+  double w = double(net_crossings);
   if (boundary_.empty()) return w;
   // Solid angle / 4 pi of the strip swept from each boundary edge u->v along d = -x: the
   // spherical triangle (u - p, v - p, d) (Van Oosterom and Strackee). Its determinant
@@ -418,6 +449,11 @@ OracleAnswers Oracle::answer(const std::vector<Vec3d>& pts) const {
   const std::size_t n = pts.size();
   OracleAnswers a;
   a.definition = closed() ? "exact" : "winding_number";
+  a.definitions = definitions();
+  a.odd_edges = odd_edges_;
+  a.solid_boundary_edges = solid_boundary_edges_;
+  a.nonmanifold_edges = nonmanifold_edges_;
+  a.parity.resize(n);
   a.tie_tolerance = tie_tol_;
   a.boundary_edges = boundary_.size();
   a.inside.resize(n);
@@ -430,8 +466,10 @@ OracleAnswers Oracle::answer(const std::vector<Vec3d>& pts) const {
   a.tied.resize(n * kMaxTied);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const double w = winding(pts[i]);
+      const RayCrossings rc = ray_crossings(pts[i]);
+      const double w = winding_from(pts[i], rc.net);
       a.winding[i] = w;
+      a.parity[i] = rc.odd ? 1 : 0;
       a.inside[i] = inside_from_winding(w) ? 1 : 0;
       OracleNearest nn = nearest(pts[i]);
       a.distance[i] = nn.distance;

@@ -19,6 +19,14 @@
 ///   - `exact` definition (no boundary edge): inside iff w != 0;
 ///   - `winding_number` definition (open mesh): inside iff |w| > 1/2.
 /// Both ignore the orientation of the surface: an inside-out closed mesh bounds the same solid.
+/// That default `inside` is what a method that declares no definition is judged against.
+///
+/// Beside it, per point, what each definition of inside says (core/inside_definition.hpp): the
+/// winding number w (judging winding_number, nonzero_winding and generalized_winding_number),
+/// and the parity of the same perturbed ray's crossings, unsigned (judging ray_parity). Which of
+/// them are defined depends on the mesh (`definitions()`): parity where every edge is used an even
+/// number of times (then every ray has that parity), the integer winding number where the mesh is
+/// closed and consistently oriented, the generalized winding number always.
 ///
 /// Distance. The unsigned distance to the closest triangle, in double, with every triangle
 /// within `tie_tolerance` of the minimum recorded as a tie (a shared edge or vertex, or a
@@ -48,13 +56,16 @@ struct OracleNearest {
 
 /// The oracle's answers for a query set, query by query (shapes: N, or N x 3, N x kMaxTied).
 struct OracleAnswers {
-  std::string definition;                 ///< "exact" | "winding_number"
+  std::string definition;                 ///< "exact" | "winding_number": the default `inside`'s
+  std::vector<std::string> definitions;   ///< the definitions defined on this mesh (Oracle::definitions)
   std::vector<std::uint8_t> inside;
+  std::vector<std::uint8_t> parity;       ///< odd count of the perturbed ray's crossings
   std::vector<double> winding, distance;
   std::vector<Vec3d> closest, normal;
   std::vector<std::int64_t> triangle, tie_count, tied;  ///< tied: N * kMaxTied, row-major
   double tie_tolerance = 0;
   std::size_t boundary_edges = 0;
+  std::size_t odd_edges = 0, nonmanifold_edges = 0, solid_boundary_edges = 0;  ///< Oracle's edge counts
 };
 
 class Oracle {
@@ -72,6 +83,19 @@ class Oracle {
   /// oriented surface, non-manifold allowed): the `exact` definition applies.
   bool closed() const { return boundary_.empty(); }
   std::size_t boundary_edge_count() const { return boundary_.size(); }
+  /// The edge counts below leave zero-area triangles out (never crossed, no solid angle).
+  /// Undirected edges used by an odd number of triangles: 0 when the mesh is closed (mod 2), so
+  /// that every ray's crossing count has the same parity.
+  std::size_t odd_edge_count() const { return odd_edges_; }
+  /// Undirected edges used by more than two triangles.
+  std::size_t nonmanifold_edge_count() const { return nonmanifold_edges_; }
+  /// Boundary edges counted with their orientation (as boundary_edge_count()): 0 when the mesh
+  /// is closed and consistently oriented, so that w is an integer wherever it is defined.
+  std::size_t solid_boundary_edge_count() const { return solid_boundary_edges_; }
+  /// The definitions of inside defined on this mesh (inside_definition.hpp's names): ray_parity
+  /// when odd_edge_count() is 0, winding_number and nonzero_winding when
+  /// solid_boundary_edge_count() is 0, and generalized_winding_number always.
+  std::vector<std::string> definitions() const;
   double diagonal() const { return diagonal_; }
   double tie_tolerance() const { return tie_tol_; }
 
@@ -80,7 +104,13 @@ class Oracle {
   /// Inside by the definition in force (see the file comment).
   bool inside_from_winding(double w) const;
   /// Signed crossing count of the ray p + t*(+x), t > 0 (exact, symbolically perturbed).
-  long crossings(const Vec3d& p) const;
+  long crossings(const Vec3d& p) const { return ray_crossings(p).net; }
+  struct RayCrossings {
+    long net = 0;      ///< signed: +1 leaving through a front face, -1 through a back face
+    bool odd = false;  ///< the parity of the crossings, whatever their sign
+  };
+  /// The crossings of that ray, signed and counted mod 2, in one traversal.
+  RayCrossings ray_crossings(const Vec3d& p) const;
   OracleNearest nearest(const Vec3d& p) const;
 
   /// All answers for these points, in parallel over the current TBB thread budget.
@@ -99,9 +129,12 @@ class Oracle {
  private:
   void build_bvh(bool verbose);
   void find_boundary();
+  /// w(p) from the ray's net crossing count: that count plus the boundary edges' strips.
+  double winding_from(const Vec3d& p, long net_crossings) const;
 
   const Mesh& mesh_;
   double diagonal_ = 0, tie_tol_ = 0;
+  std::size_t odd_edges_ = 0, nonmanifold_edges_ = 0, solid_boundary_edges_ = 0;
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> prims_;
   std::vector<std::array<Vec3d, 2>> boundary_;  ///< boundary edges u->v, with multiplicity

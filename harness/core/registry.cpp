@@ -39,6 +39,23 @@ std::string sweep_problem(const MethodInfo& m) {
 
 // Path coherence is one concept with one spelling (its variant is a row of its own,
 // docs/architecture.md, "Path coherence").
+std::string inside_declaration_problem(const MethodInfo& m) {
+  auto declared = [&](const std::string& name) -> const ParamSpec* {
+    for (const ParamSpec& p : m.params)
+      if (p.name == name) return &p;
+    return nullptr;
+  };
+  for (const InsideVariant& v : m.inside) {
+    for (const auto& [key, value] : v.when)
+      if (!declared(key)) return "inside declaration: '" + key + "' is not an option of " + m.name;
+    if (v.threshold_option.empty()) continue;
+    const ParamSpec* t = declared(v.threshold_option);
+    if (!t || t->type != ParamType::real)
+      return "inside declaration: threshold option '" + v.threshold_option + "' is not a real option of " + m.name;
+  }
+  return "";
+}
+
 std::string coherence_problem(const MethodInfo& m) {
   const auto it = std::find_if(m.params.begin(), m.params.end(), [](const ParamSpec& p) { return p.name == "coherent"; });
   const bool declared = it != m.params.end();
@@ -55,6 +72,8 @@ void Registry::add(MethodInfo info) {
     throw std::logic_error("method " + info.name + " " + bad);
   if (const std::string bad = sweep_problem(info); !bad.empty())
     throw std::logic_error("method " + info.name + ": sweep entry " + bad);
+  if (const std::string bad = inside_declaration_problem(info); !bad.empty())
+    throw std::logic_error("method " + info.name + ": " + bad);
   methods_.push_back(std::move(info));
 }
 

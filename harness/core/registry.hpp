@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "harness/core/inside_definition.hpp"
 #include "harness/core/method.hpp"
 #include "harness/core/method_spec.hpp"
 
@@ -54,6 +55,12 @@ struct MethodInfo {
   /// takes no part in `methods: all` (it needs an input a suite cannot supply, such as a store).
   /// Every entry must resolve against `params` (Registry::add checks).
   std::vector<std::string> sweep = {""};
+  /// What its inside(p), and the sign of its distance(p), compute, and the input it promises to
+  /// handle (inside_definition.hpp): per configuration, the first variant whose options match.
+  /// Empty: undeclared, judged against the oracle's default definition as results made before
+  /// declarations were. Every `when` key and threshold option must be one of `params`
+  /// (Registry::add checks). A result records the resolved definition as job.inside.
+  std::vector<InsideVariant> inside;
   /// Checks that the options make sense together, beyond each one alone (e.g. build options
   /// given beside a prebuilt store); throws InputError naming them. Optional.
   std::function<void(const Params&)> check;
@@ -75,6 +82,10 @@ std::string coherence_problem(const MethodInfo& m);
 /// Why `m.sweep` does not resolve against `m.params` (the first bad entry and the reason), ""
 /// when every entry does.
 std::string sweep_problem(const MethodInfo& m);
+
+/// Why `m.inside` does not fit `m.params` (a `when` key or a threshold option that is not a
+/// declared option, a threshold option that is not real), "" when it does.
+std::string inside_declaration_problem(const MethodInfo& m);
 
 /// Extra `bvhbench` subcommands a method brings (e.g. `bvhbench ebp stats`). `setup` adds the
 /// subcommand to the CLI app, with its options and callback.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "harness/io/npz.hpp"
+#include "harness/run/accuracy_truths.hpp"
 #include "harness/util/errors.hpp"
 
 namespace bvhbench {
@@ -57,97 +58,128 @@ json error_stats(std::vector<double> v) {
   return {{"max", v.back()}, {"p99", v[i99]}, {"mean", sum / double(v.size())}};
 }
 
-const NpyArray& need(const std::map<std::string, NpyArray>& t, const std::string& path,
-                     const std::string& key, const std::string& dtype, std::size_t n,
-                     std::size_t cols) {
-  auto it = t.find(key);
-  if (it == t.end()) throw file_error(path, "oracle has no '" + key + "' array (is it a bvhbench truth file?)");
-  const NpyArray& a = it->second;
-  if (a.dtype != dtype) throw file_error(path, "oracle '" + key + "' has dtype " + a.dtype + ", expected " + dtype);
-  std::size_t want = n * cols;
-  if (a.size() != want)
-    throw file_error(path, "oracle '" + key + "' has " + std::to_string(a.size()) + " values, expected " +
-                               std::to_string(want) + " (does it belong to this query set?)");
-  return a;
-}
-
-/// A NumPy unicode array's first string; "" if absent or not unicode.
-std::string unicode_string(const std::map<std::string, NpyArray>& t, const std::string& key) {
-  auto d = t.find(key);
-  return d == t.end() ? std::string() : d->second.unicode_value(0);
-}
 
 bool finite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-}  // namespace
+/// Examples of definition-dependent points recorded per job (the first ones in query order).
+constexpr std::size_t kDependentExamples = 5;
 
-json compute_accuracy(const Answers& ans, const std::string& truth_path, double diagonal,
-                      const std::string& queries_sha256, const std::string& mesh_sha256) {
-  auto t = read_npz(truth_path);
-  const std::string truth_qsha = unicode_string(t, "queries_sha256");
+/// The judging of a method's inside against its own definition (inside_definition.hpp), shared
+/// by inside jobs (the answers) and distance jobs (the answers' signs).
+struct Judge {
+  const InsideTruths& truths;
+  const InsideDefinition& definition;
+  const std::vector<Vec3d>& points;
+  std::size_t n;
+
+  /// What the method's own definition says at query i (the oracle's default where the mesh
+  /// does not define it).
+  bool truth(std::size_t i) const { return truths.inside(definition, i); }
+
+  /// The fields that say what was judged against what, and whether the mesh is within the
+  /// method's contract.
+  void describe(json& acc) const {
+    acc["definitions"] = truths.defined();
+    acc["judged_against"] = truths.judged_against(definition);
+    const std::string problem = truths.contract_problem(definition.contract);
+    acc["within_contract"] = definition.contract == InputContract::undeclared ? json(nullptr) : json(problem.empty());
+    acc["contract_problem"] = problem.empty() ? json(nullptr) : json(problem);
+  }
+
+  /// acc["definition_dependent"] (the points where the mesh's definitions disagree: how many, how
+  /// many of them the method got wrong under its own, the first few with what each definition
+  /// says) and acc["by_definition"] (the method's wrong answers under each definition defined on
+  /// this mesh). `answered(i)`: the method's inside at query i; `judged(i)`: whether query i
+  /// counts (a distance's sign does not near the surface).
+  template <class Answered, class Judged>
+  void definitions(json& acc, Answered answered, Judged judged) const {
+    std::map<std::string, std::size_t> wrong_under;
+    for (const std::string& d : truths.defined()) wrong_under[d] = 0;
+    std::size_t dependent = 0, wrong_dependent = 0;
+    json examples = json::array();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!judged(i)) continue;
+      const bool a = answered(i);
+      const auto says = truths.says(i);
+      for (const auto& [d, s] : says) wrong_under[d] += s != a;
+      if (!truths.dependent(i)) continue;
+      ++dependent;
+      wrong_dependent += a != truth(i);
+      if (examples.size() < kDependentExamples) examples.push_back(example(i, a, says));
+    }
+    acc["definition_dependent"] = {{"count", dependent}, {"wrong", wrong_dependent}, {"examples", examples}};
+    acc["by_definition"] = wrong_under;
+  }
+
+  json example(std::size_t i, bool answered, const std::map<std::string, bool>& says) const {
+    json e = {{"index", i}, {"winding", truths.winding(i)}, {"says", says}, {"answered", answered}};
+    if (i < points.size()) e["point"] = {points[i].x, points[i].y, points[i].z};
+    return e;
+  }
+};
+
+/// Throws when the oracle file names another query set or mesh than the job's.
+void check_oracle_belongs(const std::map<std::string, NpyArray>& t, const std::string& truth_path,
+                          const std::string& queries_sha256, const std::string& mesh_sha256) {
+  const std::string truth_qsha = oracle_string(t, "queries_sha256");
   if (!queries_sha256.empty() && !truth_qsha.empty() && truth_qsha != queries_sha256)
     throw file_error(truth_path, "oracle was computed for another query set (queries_sha256 " +
                                      truth_qsha.substr(0, 16) + "..., this query set is " +
                                      queries_sha256.substr(0, 16) + "...); recompute it with bvhbench truth");
-  const std::string truth_msha = unicode_string(t, "mesh_sha256");
+  const std::string truth_msha = oracle_string(t, "mesh_sha256");
   if (!mesh_sha256.empty() && !truth_msha.empty() && truth_msha != mesh_sha256)
     throw file_error(truth_path, "oracle was computed for another mesh (mesh_sha256 " + truth_msha.substr(0, 16) +
                                      "..., this mesh is " + mesh_sha256.substr(0, 16) +
                                      "...); recompute it with bvhbench truth");
+}
 
-  const std::size_t n = ans.type == QueryType::inside ? ans.inside.size() : ans.distance.size();
-  const double near_thr = 1e-6 * diagonal;
-  json acc;
-  acc["truth"] = truth_path;
-  acc["near_surface_threshold"] = near_thr;
-  std::string definition = unicode_string(t, "definition");
-  acc["definition"] = definition.empty() ? "unknown" : definition;
+/// acc["inside"]: the wrong answers under the method's own definition (judge), near and far
+/// from the surface, and, on an open mesh, at ambiguous points (|w| far from both 0 and 1: the
+/// threshold at 1/2 decides them, and a method may reasonably decide otherwise).
+void inside_block(json& acc, const Answers& ans, const Judge& judge, const double* td, double near_thr) {
+  const std::size_t n = judge.n;
+  std::size_t near = 0, wrong = 0, wrong_near = 0, ambiguous = 0, wrong_ambiguous = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool is_near = std::abs(td[i]) < near_thr;
+    const bool amb = judge.truths.ambiguous(i);
+    const bool bad = (ans.inside[i] != 0) != judge.truth(i);
+    near += is_near;
+    ambiguous += amb;
+    wrong += bad;
+    wrong_near += bad && is_near;
+    wrong_ambiguous += bad && amb;
+  }
+  const std::size_t n_far = n - near;
+  acc["inside"] = {{"wrong", wrong},
+                   {"rate", n ? double(wrong) / double(n) : 0.0},
+                   {"near_surface", near},
+                   {"wrong_near_surface", wrong_near},
+                   {"wrong_far", wrong - wrong_near},
+                   {"n_far", n_far},
+                   {"rate_far", n_far ? double(wrong - wrong_near) / double(n_far) : 0.0},
+                   {"ambiguous", ambiguous},
+                   {"wrong_ambiguous", wrong_ambiguous}};
+  judge.definitions(acc, [&](std::size_t i) { return ans.inside[i] != 0; }, [](std::size_t) { return true; });
+  acc["distance"] = nullptr;
+}
 
-  const double* td = need(t, truth_path, "distance", "<f8", n, 1).as<double>();
-  const std::uint8_t* ti = need(t, truth_path, "inside", "|b1", n, 1).as<std::uint8_t>();
-  const double* tw = t.count("winding") ? need(t, truth_path, "winding", "<f8", n, 1).as<double>() : nullptr;
+/// acc["distance"]: errors of the signed distance (its sign judged under the method's own
+/// definition), the closest point, the contact normal and the closest triangle.
+void distance_block(json& acc, const Answers& ans, const Judge& judge, const std::map<std::string, NpyArray>& t,
+                    const std::string& truth_path, const double* td, double near_thr, double diagonal) {
+  const std::size_t n = judge.n;
   std::size_t near = 0;
   for (std::size_t i = 0; i < n; ++i) near += std::abs(td[i]) < near_thr;
-  acc["near_surface"] = near;
-
-  if (ans.type == QueryType::inside) {
-    // On an open mesh, points whose winding number is far from both 0 and 1 are ambiguous: the
-    // threshold at 1/2 decides them, and a method may reasonably decide otherwise.
-    const bool open = definition == "winding_number";
-    std::size_t wrong = 0, wrong_near = 0, ambiguous = 0, wrong_ambiguous = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const bool is_near = std::abs(td[i]) < near_thr;
-      const bool amb = open && tw && std::abs(std::abs(tw[i]) - 0.5) < 0.25;
-      const bool bad = (ans.inside[i] != 0) != (ti[i] != 0);
-      ambiguous += amb;
-      wrong += bad;
-      wrong_near += bad && is_near;
-      wrong_ambiguous += bad && amb;
-    }
-    const std::size_t n_far = n - near;
-    acc["inside"] = {{"wrong", wrong},
-                     {"rate", n ? double(wrong) / double(n) : 0.0},
-                     {"near_surface", near},
-                     {"wrong_near_surface", wrong_near},
-                     {"wrong_far", wrong - wrong_near},
-                     {"n_far", n_far},
-                     {"rate_far", n_far ? double(wrong - wrong_near) / double(n_far) : 0.0},
-                     {"ambiguous", ambiguous},
-                     {"wrong_ambiguous", wrong_ambiguous}};
-    acc["distance"] = nullptr;
-    return acc;
-  }
-
-  const std::int64_t* tt = need(t, truth_path, "triangle", "<i8", n, 1).as<std::int64_t>();
-  const std::int64_t* ties = t.count("tie_count") ? need(t, truth_path, "tie_count", "<i8", n, 1).as<std::int64_t>() : nullptr;
+  const std::int64_t* tt = oracle_array(t, truth_path, "triangle", "<i8", n, 1).as<std::int64_t>();
+  const std::int64_t* ties = t.count("tie_count") ? oracle_array(t, truth_path, "tie_count", "<i8", n, 1).as<std::int64_t>() : nullptr;
   std::size_t max_tied = 0;
   const std::int64_t* tied = nullptr;
   if (t.count("tied_triangles") && t.at("tied_triangles").shape.size() == 2) {
     max_tied = t.at("tied_triangles").shape[1];
-    tied = need(t, truth_path, "tied_triangles", "<i8", n, max_tied).as<std::int64_t>();
+    tied = oracle_array(t, truth_path, "tied_triangles", "<i8", n, max_tied).as<std::int64_t>();
   }
-  const double* tc = t.count("closest") ? need(t, truth_path, "closest", "<f8", n, 3).as<double>() : nullptr;
-  const double* tn = t.count("normal") ? need(t, truth_path, "normal", "<f8", n, 3).as<double>() : nullptr;
+  const double* tc = t.count("closest") ? oracle_array(t, truth_path, "closest", "<f8", n, 3).as<double>() : nullptr;
+  const double* tn = t.count("normal") ? oracle_array(t, truth_path, "normal", "<f8", n, 3).as<double>() : nullptr;
 
   std::vector<double> abs_err, rel_err, angle, closest_err;
   abs_err.reserve(n);
@@ -160,11 +192,12 @@ json compute_accuracy(const Answers& ans, const std::string& truth_path, double 
       continue;
     }
     const bool is_near = std::abs(td[i]) < near_thr;
-    const double truth_signed = ti[i] ? -td[i] : td[i];
+    const bool truth_inside = judge.truth(i);
+    const double truth_signed = truth_inside ? -td[i] : td[i];
     double e = std::abs(a - truth_signed);
     // Near the surface the sign is ill-defined: compare magnitudes, and count no sign error.
     if (is_near) e = std::abs(std::abs(a) - td[i]);
-    else if ((a < 0) != ti[i]) ++sign_wrong;
+    else if ((a < 0) != truth_inside) ++sign_wrong;
     abs_err.push_back(e);
     rel_err.push_back(diagonal > 0 ? e / diagonal : e);
     if (tc && finite(ans.closest[i])) {
@@ -210,6 +243,35 @@ json compute_accuracy(const Answers& ans, const std::string& truth_path, double 
                      {"triangle_compared", tri_compared},
                      {"triangle_tied", tri_tied},
                      {"triangle_unknown", tri_unknown}};
+  // A sign is judged away from the surface, for finite answers only.
+  judge.definitions(acc, [&](std::size_t i) { return ans.distance[i] < 0; },
+                    [&](std::size_t i) { return std::isfinite(ans.distance[i]) && !(std::abs(td[i]) < near_thr); });
+}
+
+}  // namespace
+
+json compute_accuracy(const Answers& ans, const std::string& truth_path, double diagonal,
+                      const std::string& queries_sha256, const std::string& mesh_sha256,
+                      const InsideDefinition& inside, const std::vector<Vec3d>& points) {
+  auto t = read_npz(truth_path);
+  check_oracle_belongs(t, truth_path, queries_sha256, mesh_sha256);
+  const std::size_t n = ans.type == QueryType::inside ? ans.inside.size() : ans.distance.size();
+  const double near_thr = 1e-6 * diagonal;
+  json acc;
+  acc["truth"] = truth_path;
+  acc["near_surface_threshold"] = near_thr;
+  const std::string definition = oracle_string(t, "definition");
+  acc["definition"] = definition.empty() ? "unknown" : definition;
+
+  const double* td = oracle_array(t, truth_path, "distance", "<f8", n, 1).as<double>();
+  const InsideTruths truths(t, truth_path, n);
+  std::size_t near = 0;
+  for (std::size_t i = 0; i < n; ++i) near += std::abs(td[i]) < near_thr;
+  acc["near_surface"] = near;
+  const Judge judge{truths, inside, points, n};
+  judge.describe(acc);
+  if (ans.type == QueryType::inside) inside_block(acc, ans, judge, td, near_thr);
+  else distance_block(acc, ans, judge, t, truth_path, td, near_thr, diagonal);
   return acc;
 }
 

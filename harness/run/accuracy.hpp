@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "harness/core/geometry.hpp"
+#include "harness/core/inside_definition.hpp"
 #include "harness/core/method.hpp"
 
 namespace bvhbench {
@@ -29,8 +30,15 @@ struct Answers {
 /// relative errors). `queries_sha256` / `mesh_sha256`, when given, must match the ones the oracle
 /// recorded. Throws InputError if the oracle file is malformed or belongs to another query set or
 /// mesh. Wrong, NaN or infinite answers never throw: they are what the block measures.
+///
+/// Inside answers, and the signs of distances, are judged against `inside`, the method's own
+/// definition, where the mesh defines it (else, and for an undeclared one, against the oracle's
+/// default); the points where the mesh's definitions disagree are counted apart, the first few
+/// with their coordinates from `points` (the query set; may be empty), and the mesh is checked
+/// against the method's contract.
 nlohmann::json compute_accuracy(const Answers& answers, const std::string& truth_path,
                                 double diagonal, const std::string& queries_sha256 = "",
-                                const std::string& mesh_sha256 = "");
+                                const std::string& mesh_sha256 = "", const InsideDefinition& inside = {},
+                                const std::vector<Vec3d>& points = {});
 
 }  // namespace bvhbench

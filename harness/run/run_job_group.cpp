@@ -212,11 +212,13 @@ class GroupRun {
   void create_method() {
     const MethodSpec& spec = first().method;
     info_ = spec.info;
+    inside_ = resolve_inside(info_->inside, spec.params);
     method_ = apply_test_slowdown(Registry::global().create(spec), spec.name);  // unset: itself
     for (GroupJob& j : jobs_) {
       j.r["job"]["method"] = info_->name;
       j.r["job"]["params"] = spec.params.values();
       j.r["job"]["params_key"] = spec.params.non_default_string();
+      j.r["job"]["inside"] = inside_.to_json();  // what its inside means, judged below (accuracy.hpp)
       j.r["context"] = run_context();  // registration may have noted library versions
     }
   }
@@ -359,7 +361,8 @@ class GroupRun {
                      {"mesh_bytes", mesh_bytes_}};
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
     if (!spec.truth_path.empty())
-      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_);
+      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_, inside_,
+                                    j.qs.points);
     finish(k);
   }
 
@@ -374,6 +377,7 @@ class GroupRun {
   const GroupHooks& hooks_;
   std::vector<GroupJob> jobs_;
   const MethodInfo* info_ = nullptr;
+  InsideDefinition inside_;  ///< the method's definition of inside as configured (inside_definition.hpp)
   std::unique_ptr<Method> method_;
   double diagonal_ = 0;
   std::string mesh_sha256_;

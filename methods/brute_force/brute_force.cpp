@@ -5,8 +5,10 @@
 //    The contact normal is the closest triangle's unit face normal (right-hand rule: outward on
 //    an outward-oriented mesh).
 //  - inside(p): generalized winding number w(p) = sum of signed solid angles / 4 pi
-//    (Jacobson et al. 2013), inside iff w > 1/2. Exactly the parity answer on closed meshes
-//    (up to rounding for points on the surface), and a principled answer on open ones.
+//    (Jacobson et al. 2013), inside iff w > winding_threshold (1/2). On a closed, consistently
+//    oriented mesh that is the winding number's answer (up to rounding for points on the
+//    surface), which ray parity shares unless shells overlap or the mesh is inside out; on open
+//    ones a principled answer (its declaration, m.inside below, says so for the judging).
 #include <cmath>
 
 #include "harness/core/mesh.hpp"
@@ -108,6 +110,8 @@ void bvhbench_register_brute_force(bvhbench::Registry& r) {
   m.machine_dependent_counters = {};  // none: our own loop over every triangle, no library
   m.params = {{"winding_threshold", ParamType::real, ParamRole::query, "0.5",
                "inside iff the generalized winding number exceeds this", {}, 0.0, 1.0}};
+  // The generalized winding number, summed exactly over every triangle: defined on any soup.
+  m.inside = {{{}, {InsideRule::generalized_winding_number, false, 0.5, InputContract::any}, "winding_threshold"}};
   m.create = [](const Params& p) { return std::make_unique<BruteForce>(p); };
   r.add(std::move(m));
 }

@@ -412,6 +412,9 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
       {"coherent", ParamType::boolean, ParamRole::query, "false",
        "hint each distance query with the previous closest point and triangle (haptic paths)", {}},
   };
+  // Side_of_triangle_mesh counts a ray's crossings: parity, defined on closed input (its
+  // documentation asks for closed meshes; overlapping shells still have one parity).
+  m.inside = {{{}, {InsideRule::ray_parity, false, 0.5, InputContract::closed}, ""}};
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
   m.sweep = {"", "coherent=true"};
   // The KD-tree is built for distance jobs only: with it, a structure serves one query type.

@@ -210,6 +210,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();
+  // The integer winding number by signed crossings from a reference point, inside iff w >= 1
+  // (DESIGN.md, "Inside"): built for closed, consistently oriented meshes.
+  m.inside = {{{}, {InsideRule::winding_number, false, 0.5, InputContract::closed_oriented}, ""}};
   m.check = check_ooc_options;
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells
   // apart). No store: a suite has none to give.

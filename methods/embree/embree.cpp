@@ -456,6 +456,8 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
       {"coherent", ParamType::boolean, ParamRole::query, "false",
        "seed the point-query radius with the distance to the previous closest point", {}},
   };
+  // Every hit along a ray, mod 2 (a vote of `rays` of them): parity, defined on closed input.
+  m.inside = {{{}, {InsideRule::ray_parity, false, 0.5, InputContract::closed}, ""}};
   // Swept by `methods: all`: the defaults and the coherent variant (which only a path tells apart).
   m.sweep = {"", "coherent=true"};
   m.create = [](const Params& p) -> std::unique_ptr<Method> {

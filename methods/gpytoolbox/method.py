@@ -24,6 +24,10 @@ PARAMETERS = [
      "help": "fast winding number: larger is more accurate and slower (libigl recommends 2)"},
 ]
 
+# The fast winding number > 0.5: an approximation of the generalized winding number, any soup.
+INSIDE = [{"definition": "generalized_winding_number", "threshold": 0.5, "approximate": True,
+           "contract": "any"}]
+
 # The default sweep of `methods: all` suites: whole query sets. One entry: distance on 20,000
 # random points of the 1M bunny is ~18 s a pass here; its knobs are swept in suites/python.yml.
 SWEEP = ["batch=true"]

@@ -29,6 +29,18 @@ PARAMETERS = [
      "help": "fast winding number: Taylor expansion order of its hierarchy"},
 ]
 
+# What inside (and the distance's sign) means, per sign type: the exact generalized winding
+# number and its fast approximation hold on any soup; the pseudonormal at the closest feature
+# gives the winding number's answer on closed, outward, manifold meshes without self-intersections
+# only (on overlapping shells the closest face may be the other shell's).
+INSIDE = [
+    {"when": {"sign_type": "winding_number"}, "definition": "generalized_winding_number",
+     "threshold": 0.5, "contract": "any"},
+    {"when": {"sign_type": "fast_winding_number"}, "definition": "generalized_winding_number",
+     "threshold": 0.5, "approximate": True, "contract": "any"},
+    {"when": {"sign_type": "pseudonormal"}, "definition": "winding_number", "contract": "embedded"},
+]
+
 # The default sweep of a `methods: all` suite (methods/README.md): the fast winding number in
 # batches. The exact winding number sums every triangle per point, too slow to run everywhere.
 SWEEP = ["sign_type=fast_winding_number,batch=true"]

@@ -36,6 +36,9 @@ PARAMETERS = [
              "against a ray through an edge or vertex"},
 ]
 
+# compute_occupancy: the parity of a ray's crossings (a vote of nsamples rays), closed meshes.
+INSIDE = [{"definition": "ray_parity", "contract": "closed"}]
+
 # The default sweep of `methods: all` suites: whole query sets (nsamples is swept in
 # suites/python.yml).
 SWEEP = ["batch=true"]

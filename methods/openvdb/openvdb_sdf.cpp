@@ -494,6 +494,11 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
   };
   // The band (band=auto) and the dense-grid estimate are sized from the job's query points.
   m.sharing = [](const Params&) { return StructureSharing::job_alone; };
+  // meshToVolume signs its field by flood-filling the outside from the box: what the flood
+  // cannot reach is inside, the union of the shells, sampled at the voxel. It asks for a
+  // watertight mesh; on one not consistently oriented (a flipped patch) the nonzero winding
+  // number is not defined, so its contract asks for that too.
+  m.inside = {{{}, {InsideRule::nonzero_winding, true, 0.5, InputContract::closed_oriented}, ""}};
   m.create = [](const Params& p) { return std::make_unique<OpenVdbSdf>(p); };
   r.add(std::move(m));
 }

@@ -26,6 +26,9 @@ DESCRIPTION = ("point-cloud-utils: closest_points_on_mesh (libigl AABB built per
 REQUIRES = ["numpy", "point_cloud_utils"]
 CAPABILITIES = {"inside": True, "distance": True, "closest_triangle": True}
 PARAMETERS = []
+# The fast winding number > 0.5: an approximation of the generalized winding number, any soup.
+INSIDE = [{"definition": "generalized_winding_number", "threshold": 0.5, "approximate": True,
+           "contract": "any"}]
 # The default sweep of `methods: all` suites: whole query sets. (Those suites run on small models:
 # on the 1M bunny its distance ran at 112 queries/s on random points, libigl's AABB built per
 # call; suites/python.yml runs it there on few points.)

@@ -16,11 +16,17 @@ import os
 import sys
 
 DECLARED = ("DESCRIPTION", "REQUIRES", "CAPABILITIES", "PARAMETERS")
-OPTIONAL = ("SWEEP",)  # the default sweep of `methods: all` suites (methods/README.md)
+# SWEEP: the default sweep of `methods: all` suites; INSIDE: what its inside means, per
+# configuration (methods/README.md, "What inside means").
+OPTIONAL = ("SWEEP", "INSIDE")
 PARAM_TYPES = ("integer", "real", "boolean", "text", "choice")
 PARAM_ROLES = ("build", "query")  # shapes the structure, or only how it is queried
 TYPE_ALIASES = {"int": "integer", "bool": "boolean"}  # the names `bvhbench methods` shows
 CAPABILITY_KEYS = ("inside", "distance", "closest_triangle")
+# The names harness/core/inside_definition.hpp reads (to_string of InsideRule, InputContract).
+INSIDE_RULES = ("ray_parity", "winding_number", "nonzero_winding", "generalized_winding_number")
+INSIDE_CONTRACTS = ("any", "closed", "closed_oriented", "closed_oriented_manifold", "embedded")
+INSIDE_KEYS = ("when", "definition", "approximate", "threshold", "threshold_option", "contract")
 
 
 class SetupError(Exception):
@@ -135,10 +141,43 @@ def read_declarations(folder):
     sweep = found.get("SWEEP", [""])
     if not (isinstance(sweep, (list, tuple)) and all(isinstance(e, str) for e in sweep)):
         raise DeclarationError(f"{path}: SWEEP must be a list of parameter texts (\"k=v,k=v\"; \"\" = defaults)")
+    inside = _inside_declaration(path, found.get("INSIDE", []), {p["name"] for p in params})
     missing = [r for r in requires if importlib.util.find_spec(r) is None]
-    return {"name": os.path.basename(os.path.normpath(folder)), "description": description,
+    return {"inside": inside, "name": os.path.basename(os.path.normpath(folder)), "description": description,
             "requires": list(requires), "capabilities": {k: caps.get(k, False) for k in CAPABILITY_KEYS},
             "parameters": params, "sweep": list(sweep), "missing": missing, "path": path}
+
+
+def _inside_declaration(path, declared, options):
+    """INSIDE, checked: a list of {"when": {option: value}, "definition", "approximate",
+    "threshold", "threshold_option", "contract"}, the first matching configuration's entry
+    applying; every value normalised to a string for the C++ side."""
+    if not isinstance(declared, (list, tuple)):
+        raise DeclarationError(f"{path}: INSIDE must be a list of dicts")
+    out = []
+    for i, d in enumerate(declared):
+        where = f"{path}: INSIDE[{i}]"
+        if not isinstance(d, dict) or not {"definition", "contract"} <= set(d) or set(d) - set(INSIDE_KEYS):
+            raise DeclarationError(f"{where} must be a dict with definition and contract (and "
+                                   f"optionally when, approximate, threshold, threshold_option)")
+        if d["definition"] not in INSIDE_RULES:
+            raise DeclarationError(f"{where}: definition must be one of {INSIDE_RULES}")
+        if d["contract"] not in INSIDE_CONTRACTS:
+            raise DeclarationError(f"{where}: contract must be one of {INSIDE_CONTRACTS}")
+        when = d.get("when", {})
+        if not isinstance(when, dict) or any(k not in options for k in when):
+            raise DeclarationError(f"{where}: when must map options of PARAMETERS to values")
+        option = d.get("threshold_option", "")
+        if option and option not in options:
+            raise DeclarationError(f"{where}: threshold_option {option!r} is not an option of PARAMETERS")
+        if not isinstance(d.get("approximate", False), bool):
+            raise DeclarationError(f"{where}: approximate must be a boolean")
+        out.append({"when": {str(k): ("true" if v is True else "false" if v is False else str(v))
+                             for k, v in when.items()},
+                    "definition": d["definition"], "contract": d["contract"],
+                    "approximate": d.get("approximate", False),
+                    "threshold": float(d.get("threshold", 0.5)), "threshold_option": option})
+    return out
 
 
 def module_version(name):

@@ -77,6 +77,18 @@ MethodInfo method_info(const py::dict& d, const std::string& folder) {
   // A method that keeps state along a path says so as a `coherent` option (registry.hpp).
   m.caps.coherence = std::any_of(m.params.begin(), m.params.end(), [](const ParamSpec& s) { return s.name == "coherent"; });
   m.sweep = d["sweep"].cast<std::vector<std::string>>();
+  for (auto v : d["inside"].cast<py::list>()) {
+    py::dict vd = v.cast<py::dict>();
+    InsideVariant iv;
+    iv.when = vd["when"].cast<std::map<std::string, std::string>>();
+    const std::string what = folder + "/method.py: INSIDE";
+    iv.definition.rule = parse_inside_rule(vd["definition"].cast<std::string>(), what);
+    iv.definition.contract = parse_input_contract(vd["contract"].cast<std::string>(), what);
+    iv.definition.approximate = vd["approximate"].cast<bool>();
+    iv.definition.threshold = vd["threshold"].cast<double>();
+    iv.threshold_option = vd["threshold_option"].cast<std::string>();
+    m.inside.push_back(std::move(iv));
+  }
   m.create = [decl](const Params& p) { return std::make_unique<PythonMethod>(decl, p); };
   return m;
 }
@@ -130,6 +142,10 @@ void bvhbench_register_python_host(bvhbench::Registry& r) {
       }
       if (const std::string bad = coherence_problem(m); !bad.empty()) {
         r.add_left_out(name, folder + "/method.py: PARAMETERS: " + bad);
+        continue;
+      }
+      if (const std::string bad = inside_declaration_problem(m); !bad.empty()) {
+        r.add_left_out(name, folder + "/method.py: INSIDE: " + bad);
         continue;
       }
       r.add(std::move(m));

@@ -44,6 +44,9 @@ PARAMETERS = [
 # The size the mesh is scaled to (its box's largest side, within a factor of two).
 RESCALED_SIZE = 1024.0
 
+# contains_points: the parity of a ray's crossings, on a watertight (closed) mesh.
+INSIDE = [{"definition": "ray_parity", "contract": "closed"}]
+
 # The default sweep of a `methods: all` suite (methods/README.md): in batches, what a Python
 # caller gets from arrays (one call per point costs the interpreter in every query).
 SWEEP = ["batch=true"]

@@ -65,6 +65,17 @@ PARAMETERS = [
     {"name": "bvh_leaf_size", "type": "integer", "default": 0, "min": 0, "max": 64, "role": "build",
      "help": "triangles per BVH leaf; 0 is Warp's default for the constructor"},
 ]
+# What inside (and the distance's sign) means, per sign: ray parity on closed meshes; the
+# orientation of the closest hit (raycast) and the pseudonormal give the winding number's answer
+# on closed, outward meshes without self-intersections (on overlapping shells the closest face may
+# be the other shell's); the fast winding number approximates the generalized one.
+INSIDE = [
+    {"when": {"sign": "parity"}, "definition": "ray_parity", "contract": "closed"},
+    {"when": {"sign": "raycast"}, "definition": "winding_number", "contract": "embedded"},
+    {"when": {"sign": "normal"}, "definition": "winding_number", "contract": "embedded"},
+    {"when": {"sign": "winding_number"}, "definition": "generalized_winding_number", "threshold": 0.5,
+     "approximate": True, "contract": "any"},
+]
 # The default sweep of `methods: all` suites: whole query sets (the interpreter's per-query cost
 # is the per-query rows' question). One entry: distance on 20,000 random points of the 1M bunny is
 # ~8 s a pass here; the signs are swept in suites/python.yml.

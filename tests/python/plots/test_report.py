@@ -213,8 +213,11 @@ def test_accuracy_lines_one_per_method_and_the_appendix_names_the_wrong_jobs(rep
                 if r["job"]["method"] == "openvdb" and r["status"] == "ok"
                 and r["job"]["mesh"]["name"] in ("cow", "fandisk") and r["job"]["query"] == "distance")
     assert fmt.sci(worst) in openvdb
-    for exact in ("ebp_octree", "cgal_aabb", "embree", "brute_force"):
-        assert next(b for b in bullets if b.startswith(f"- {exact}:")).startswith(f"- {exact}: exact on all")
+    # Each line names the method's own definition of inside.
+    for exact, definition in (("ebp_octree", "winding number > 1/2"), ("cgal_aabb", "ray parity"),
+                              ("embree", "ray parity"), ("brute_force", "generalized winding number > 0.5")):
+        assert next(b for b in bullets if b.startswith(f"- {exact} (")).startswith(
+            f"- {exact} ({definition}): exact on all")
     # The appendix: every wrong ok job, on models and stress cases, with its problem.
     appendix = md.split("## Appendix: accuracy, job by job")[1].split("\n## ")[0]
     listed = {cells(l)[-1] for l in appendix.splitlines() if l.startswith("| ") and "__" in l}
