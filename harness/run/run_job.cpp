@@ -22,6 +22,7 @@
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
 #include "harness/run/dataset_manifest.hpp"
+#include "harness/run/latency_by_distance.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/query_protocol.hpp"
 #include "harness/run/system_info.hpp"
@@ -296,7 +297,15 @@ json run_job(const JobSpec& spec) {
 
     // ---- answers and accuracy -----------------------------------------------------------------
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
-    if (!spec.truth_path.empty()) r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256);
+    if (!spec.truth_path.empty()) {
+      r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal, qs.sha256, mesh_sha256);
+      // Where the method is fast and where slow: the query set's latencies by the oracle's
+      // distance to the surface (none in batches: no query has a latency of its own).
+      if (!m.batch) {
+        const std::vector<double> in_order(m.latency_in_order.begin(), m.latency_in_order.begin() + std::ptrdiff_t(n));
+        r["queries"]["by_distance"] = latency_by_distance(in_order, spec.truth_path, diagonal);
+      }
+    }
   } catch (const InputError& e) {
     fail(status::rejected_input, e.what());
   } catch (const UnsupportedError& e) {
