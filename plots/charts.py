@@ -21,6 +21,7 @@ import definitions
 import fmt
 import headline
 import metrics
+import rate_by_distance
 import registry
 import stability
 import sweeps
@@ -779,6 +780,7 @@ CHARTS = {
         "For each method, the share of queries slower than a given latency, from the recorded "
         "percentiles (p50, p99, p99.9, max). The dashed line is the 1 ms haptic deadline; the "
         "legend gives the share of queries that missed it."),
+    "rate_vs_distance": Chart(rate_by_distance.chart, rate_by_distance.TITLE, rate_by_distance.CAPTION),
     "thread_scaling": Chart(
         thread_scaling, "Throughput against query threads",
         "Aggregate queries per second with T query threads (a suite's `threads:` axis), each "

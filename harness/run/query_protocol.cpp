@@ -96,7 +96,8 @@ void QueryProtocol::timed_passes(int repeat, Progress& progress) {
   }
   // One call answers every query of a batch: no query has a latency of its own, so none is
   // recorded rather than the pass time spread evenly over the queries.
-  if (!m_.batch) replay_.latency_pass(&m_.latency_ns);
+  if (!m_.batch) replay_.latency_pass(&m_.latency_in_order);
+  m_.latency_ns = m_.latency_in_order;
   std::sort(m_.latency_ns.begin(), m_.latency_ns.end());
   m_.query_rss = std::max(m_.query_rss, current_rss_bytes());
 }

@@ -26,6 +26,9 @@ struct QueryMeasurement {
   std::vector<double> pass_seconds;
   std::vector<double> single_qps;  ///< T > 1: the one-thread pass after each timed pass
   std::vector<double> latency_ns;  ///< per query of the latency pass, sorted; empty in batches
+  /// The same latencies in the order the queries were answered: every thread's stream at its
+  /// offset, so the query set's queries come first, in query order (path 0 for probes).
+  std::vector<double> latency_in_order;
   std::size_t query_rss = 0;       ///< the largest resident set seen while querying
 };
 

@@ -19,6 +19,7 @@
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
 #include "harness/run/dataset_manifest.hpp"
+#include "harness/run/latency_by_distance.hpp"
 #include "harness/run/machine_fingerprint.hpp"
 #include "harness/run/query_protocol.hpp"
 #include "harness/run/run_job.hpp"
@@ -360,9 +361,16 @@ class GroupRun {
                      {"query_rss_bytes", m.query_rss},
                      {"mesh_bytes", mesh_bytes_}};
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
-    if (!spec.truth_path.empty())
+    if (!spec.truth_path.empty()) {
       j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_, inside_,
-                                    j.qs.points);
+                                         j.qs.points);
+      // Where the method is fast and where slow: the query set's latencies by the oracle's
+      // distance to the surface (none in batches: no query has a latency of its own).
+      if (!m.batch) {
+        const std::vector<double> in_order(m.latency_in_order.begin(), m.latency_in_order.begin() + std::ptrdiff_t(n));
+        j.r["queries"]["by_distance"] = latency_by_distance(in_order, spec.truth_path, diagonal_);
+      }
+    }
     finish(k);
   }
 
