@@ -212,9 +212,10 @@ class GroupRun {
 
   void create_method() {
     const MethodSpec& spec = first().method;
+    // Created first: an unresolved spec (an unknown method, a bad option) throws its own message here.
+    method_ = apply_test_slowdown(Registry::global().create(spec), spec.name);  // unset: itself
     info_ = spec.info;
     inside_ = resolve_inside(info_->inside, spec.params);
-    method_ = apply_test_slowdown(Registry::global().create(spec), spec.name);  // unset: itself
     for (GroupJob& j : jobs_) {
       j.r["job"]["method"] = info_->name;
       j.r["job"]["params"] = spec.params.values();
