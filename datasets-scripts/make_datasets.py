@@ -199,7 +199,7 @@ def declared_sizes() -> dict:
             "presets": out}
 
 
-def main(argv=None) -> int:
+def _argument_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", choices=sorted(PRESETS), help="which meshes to make")
     ap.add_argument("--out", help="output folder (default: data/<preset>/ at the repo root)")
@@ -213,43 +213,50 @@ def main(argv=None) -> int:
     ap.add_argument("--declared-sizes", action="store_true",
                     help="print every preset's declared triangle counts as JSON (what "
                          "datasets-scripts/preset_sizes.json holds for the suite's estimate) and exit")
-    args = ap.parse_args(argv)
-    progress.quiet = args.quiet
+    return ap
 
-    if args.declared_sizes:
-        print(json.dumps(declared_sizes(), indent=1, sort_keys=True))
-        return 0
 
-    if args.list:
-        for fname, fam in FAMILIES.items():
-            print(f"family {fname:28s} {fam.kind:10s} {fam.description}  {fam.defaults}")
-        for pname, specs in PRESETS.items():
-            print(f"preset {pname}: " + ", ".join(n for n, _, _ in specs))
-        return 0
-    if not args.preset:
-        ap.error("--preset is required")
+def _print_listing() -> None:
+    for fname, fam in FAMILIES.items():
+        print(f"family {fname:28s} {fam.kind:10s} {fam.description}  {fam.defaults}")
+    for pname, specs in PRESETS.items():
+        print(f"preset {pname}: " + ", ".join(n for n, _, _ in specs))
 
-    shared = args.shared_meshes or default_shared_meshes()
-    out_dir = os.path.abspath(args.out or os.path.join(REPO_ROOT, "data", args.preset))
+
+def _previous_manifest(manifest_path: str, force: bool) -> dict:
+    """The meshes an earlier run recorded, by name (none with --force, or when unreadable)."""
+    if force or not os.path.exists(manifest_path):
+        return {}
+    try:
+        with open(manifest_path) as f:
+            return {m["name"]: m for m in json.load(f).get("meshes", [])}
+    except (OSError, ValueError, KeyError):
+        return {}
+
+
+def _make_one(ctx, out_dir: str, name: str, family: str, params: dict) -> dict:
+    """One mesh made, with its expected time said first when it is long."""
+    full = {**FAMILIES[family].defaults, **params}
+    t0 = time.monotonic()
+    expected = expected_seconds(family, full)
+    if expected and expected >= 30:
+        log(f"{name}: making {full['triangles']:,} triangles, expected ~{expected / 60:.0f} min "
+            f"(at {SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI):.0f} s per million triangles)")
+    entry = make_mesh(ctx, out_dir, name, family, params)
+    log(f"{name}: done in {time.monotonic() - t0:.1f}s ({entry['triangles']:,} triangles, "
+        f"closed={entry['closed']})")
+    return entry
+
+
+def make_preset(preset: str, out_dir: str, shared: str, only, force: bool) -> None:
+    """Every mesh of the preset (or of `only`) that is not up to date, the manifest rewritten after each."""
     os.makedirs(out_dir, exist_ok=True)
     manifest_path = os.path.join(out_dir, "manifest.json")
-    old = {}
-    if os.path.exists(manifest_path) and not args.force:
-        try:
-            with open(manifest_path) as f:
-                old = {m["name"]: m for m in json.load(f).get("meshes", [])}
-        except (OSError, ValueError, KeyError):
-            old = {}
-
-    specs = PRESETS[args.preset]
-    if args.only:
-        missing = set(args.only) - {n for n, _, _ in specs}
-        if missing:
-            ap.error(f"not in preset {args.preset}: {sorted(missing)}")
+    old = _previous_manifest(manifest_path, force)
     ctx = Context(shared)
     manifest = {
         "manifest_version": MANIFEST_VERSION,
-        "preset": args.preset,
+        "preset": preset,
         "generator": "datasets-scripts/make_datasets.py",
         "format": "PLY binary_little_endian; vertex x,y,z as coordinate_type (float32 unless "
                   "noted); face: list uchar int vertex_indices, triangles",
@@ -257,33 +264,43 @@ def main(argv=None) -> int:
     }
     t_all = time.monotonic()
     made = skipped = 0
-    for name, family, params in specs:
-        fam = FAMILIES[family]
-        full = {**fam.defaults, **params}
-        if args.only and name not in args.only:
+    for name, family, params in PRESETS[preset]:
+        if only and name not in only:
             if name in old:
                 manifest["meshes"].append(old[name])
             continue
-        if not args.force and up_to_date(old.get(name), out_dir, family, full):
+        if not force and up_to_date(old.get(name), out_dir, family, {**FAMILIES[family].defaults, **params}):
             log(f"{name}: up to date, skipped")
             manifest["meshes"].append(old[name])
             skipped += 1
             continue
-        t0 = time.monotonic()
-        expected = expected_seconds(family, full)
-        if expected and expected >= 30:
-            log(f"{name}: making {full['triangles']:,} triangles, expected ~{expected / 60:.0f} min "
-                f"(at {SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI):.0f} s per million triangles)")
-        entry = make_mesh(ctx, out_dir, name, family, params)
-        manifest["meshes"].append(entry)
+        manifest["meshes"].append(_make_one(ctx, out_dir, name, family, params))
         made += 1
-        log(f"{name}: done in {time.monotonic() - t0:.1f}s ({entry['triangles']:,} triangles, "
-            f"closed={entry['closed']})")
         _atomic_json(manifest_path, manifest)
         gc.collect()
     _atomic_json(manifest_path, manifest)
-    log(f"preset {args.preset}: {made} made, {skipped} up to date, "
+    log(f"preset {preset}: {made} made, {skipped} up to date, "
         f"{time.monotonic() - t_all:.1f}s -> {manifest_path}")
+
+
+def main(argv=None) -> int:
+    ap = _argument_parser()
+    args = ap.parse_args(argv)
+    progress.quiet = args.quiet
+    if args.declared_sizes:
+        print(json.dumps(declared_sizes(), indent=1, sort_keys=True))
+        return 0
+    if args.list:
+        _print_listing()
+        return 0
+    if not args.preset:
+        ap.error("--preset is required")
+    if args.only:
+        missing = set(args.only) - {n for n, _, _ in PRESETS[args.preset]}
+        if missing:
+            ap.error(f"not in preset {args.preset}: {sorted(missing)}")
+    out_dir = os.path.abspath(args.out or os.path.join(REPO_ROOT, "data", args.preset))
+    make_preset(args.preset, out_dir, args.shared_meshes or default_shared_meshes(), args.only, args.force)
     return 0
 
 

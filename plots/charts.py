@@ -258,11 +258,7 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         raise NoData(f"no ok `{query}` job has both {xm.label.lower()} and "
                      f"{ym.label.lower()}" + (f" ({missing} ok jobs lack the first)"
                                               if missing else ""))
-    panels = sorted({(j.mesh, j.kind) for j, _, _ in pts},
-                    key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), _kind_key(p[1])))
-    dropped = len(panels) - MAX_PANELS
-    panels = sorted(panels[:MAX_PANELS],
-                    key=lambda p: (rs.mesh_triangles(p[0]) or 0, _kind_key(p[1])))
+    panels, dropped = _pareto_panels(rs, pts)
     legend_width = 3.4
     fig, axes = _grid(len(panels), legend_width=legend_width)
     has_zero = xm.log and xm.zero_label and any(x <= 0 for _, x, _ in pts)
@@ -285,33 +281,10 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         for method in methods:
             _draw_method_curves(ax, method, here, shown_x, front_ids, styles, handles)
         ax.set_title(_mesh_title(rs, mesh, f"{kind} path"), fontsize=9)
-        if xm.log:
-            ax.set_xscale("log")
-        if ym.log:
-            ax.set_yscale("log")
-        ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel(axis_label(xm), fontsize=8)
-        ax.set_ylabel(axis_label(ym), fontsize=8)
-        ax.tick_params(labelsize=7)
-        if ym.log:
-            ys = [y for _, _, y in here]
-            ax.set_ylim(min(ys) / 1.8, max(ys) * 1.8)   # room for markers and labels
-            _log_ticks(ax, "y", _si_formatter("q/s") if ym.unit == "queries/s" else None)
-        xs = [x for _, x, _ in pts if x > 0]
-        if floor:
-            _exact_axis(ax, xm, floor, max(xs) if xs else floor)
-        elif xm.log:
-            ax.set_xlim(min(xs) / 1.5, max(xs) * 2.5)    # room for the knob labels
-            _log_ticks(ax, "x", FuncFormatter(lambda v, _: f"{v:g}"))
-            if math.log10(max(xs) / min(xs)) > 6:        # many decades: label a few of them
-                ax.xaxis.set_major_locator(LogLocator(base=10, numticks=7))
+        _pareto_axes(ax, xm, ym, [y for _, _, y in here], [x for _, x, _ in pts if x > 0], floor)
         _draw_frontier(ax, [(p[2], p[1]) for p in front],
                        [(shown_x(p[3], p[0]), p[1]) for p in front], xm, ym)
-        better_x = "left" if xm.better == "lower" else "right"
-        better_y = "top" if ym.better == "higher" else "bottom"
-        ax.text(0.02 if better_x == "left" else 0.98, 0.97 if better_y == "top" else 0.03,
-                "better", transform=ax.transAxes, fontsize=7, color="#888888",
-                ha=better_x, va=better_y, style="italic")
+        _better_corner(ax, xm, ym)
     legend = [handles[k] for k in sorted(handles)]
     legend.append(Line2D([], [], color="#333333", linewidth=2.5, alpha=0.35,
                          label="Pareto frontier\n(all methods; shaded: dominated)"))
@@ -327,6 +300,48 @@ def pareto_chart(rs, query, x_metric, y_metric="qps"):
         note.append(f"{dropped} smaller model/path panels omitted.")
     return _finish(fig, legend, "method · swept parameter", " ".join(note),
                    legend_width=legend_width)
+
+
+def _pareto_panels(rs, pts):
+    """The (model, path) panels to draw, largest models kept when there are too many, drawn
+    smallest first; and how many were left out."""
+    panels = sorted({(j.mesh, j.kind) for j, _, _ in pts},
+                    key=lambda p: (-(rs.mesh_triangles(p[0]) or 0), _kind_key(p[1])))
+    dropped = len(panels) - MAX_PANELS
+    panels = sorted(panels[:MAX_PANELS],
+                    key=lambda p: (rs.mesh_triangles(p[0]) or 0, _kind_key(p[1])))
+    return panels, dropped
+
+
+def _pareto_axes(ax, xm, ym, ys, xs, floor):
+    """A panel's scales, labels and limits: ys the panel's values, xs every panel's positive x."""
+    if xm.log:
+        ax.set_xscale("log")
+    if ym.log:
+        ax.set_yscale("log")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_xlabel(axis_label(xm), fontsize=8)
+    ax.set_ylabel(axis_label(ym), fontsize=8)
+    ax.tick_params(labelsize=7)
+    if ym.log:
+        ax.set_ylim(min(ys) / 1.8, max(ys) * 1.8)   # room for markers and labels
+        _log_ticks(ax, "y", _si_formatter("q/s") if ym.unit == "queries/s" else None)
+    if floor:
+        _exact_axis(ax, xm, floor, max(xs) if xs else floor)
+    elif xm.log:
+        ax.set_xlim(min(xs) / 1.5, max(xs) * 2.5)    # room for the knob labels
+        _log_ticks(ax, "x", FuncFormatter(lambda v, _: f"{v:g}"))
+        if math.log10(max(xs) / min(xs)) > 6:        # many decades: label a few of them
+            ax.xaxis.set_major_locator(LogLocator(base=10, numticks=7))
+
+
+def _better_corner(ax, xm, ym):
+    """'better' written in the corner the metrics' directions point to."""
+    better_x = "left" if xm.better == "lower" else "right"
+    better_y = "top" if ym.better == "higher" else "bottom"
+    ax.text(0.02 if better_x == "left" else 0.98, 0.97 if better_y == "top" else 0.03,
+            "better", transform=ax.transAxes, fontsize=7, color="#888888",
+            ha=better_x, va=better_y, style="italic")
 
 
 def _exact_axis(ax, xm, floor, x_max):

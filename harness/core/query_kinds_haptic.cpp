@@ -230,103 +230,152 @@ HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_
 
 namespace {
 
+/// Where the probe is and where it goes, carried from one step of an episode to the next.
+struct ProbeState {
+  Vec3d surf;   // the closest surface point, followed along the path
+  Vec3d nrm;    // the outward direction at surf
+  Vec3d dir;    // the heading, in the tangent plane
+  Vec3d probe;  // the probe's position
+  Vec3d vel;    // its velocity
+  double omega = 0;  // the heading's angular velocity
+};
+
+/// An episode's smooth speed along the surface and offset across the band (random phases).
+struct EpisodeMotion {
+  double slide = 0, band = 0;
+  double fs = 0, ps = 0, f1 = 0, p1 = 0, f2 = 0, p2 = 0;
+  // Correctly rounded sin/cos: the path is the same bytes on every machine (correctly_rounded.hpp).
+  double speed_at(double t) const { return slide * (0.6 + 0.4 * correctly_rounded::sin(kTwoPi * fs * t + ps)); }
+  double offset_at(double t) const {
+    return band * 0.9 * (0.6 * correctly_rounded::sin(kTwoPi * f1 * t + p1) + 0.4 * correctly_rounded::sin(kTwoPi * f2 * t + p2));
+  }
+};
+
+/// First contact: an area-weighted surface point, outward along its face normal, and a random
+/// heading in the tangent plane.
+ProbeState first_contact(const Mesh& mesh, const AreaSampler& sampler, Rng& rng) {
+  ProbeState s;
+  const std::uint32_t t0 = sampler.pick(rng.uniform());
+  const Vec3d a = mesh.vertex(t0, 0), b = mesh.vertex(t0, 1), c = mesh.vertex(t0, 2);
+  const double r1 = rng.uniform(), r2 = rng.uniform();
+  s.surf = uniform_in_triangle(a, b, c, r1, r2);
+  s.nrm = triangle_normal(a, b, c);
+  do {
+    s.dir = Vec3d(rng.normal(), rng.normal(), rng.normal());
+    s.dir -= s.nrm * dot(s.dir, s.nrm);
+  } while (!(norm(s.dir) > 1e-6));
+  s.dir = normalized(s.dir);
+  return s;
+}
+
+EpisodeMotion draw_motion(Rng& rng, double slide, double band) {
+  EpisodeMotion m;
+  m.slide = slide;
+  m.band = band;
+  m.fs = rng.uniform(0.2, 0.8);
+  m.ps = rng.uniform(0, kTwoPi);
+  m.f1 = rng.uniform(0.3, 1.0);
+  m.p1 = rng.uniform(0, kTwoPi);
+  m.f2 = rng.uniform(1.5, 4.0);
+  m.p2 = rng.uniform(0, kTwoPi);
+  return m;
+}
+
+/// The constants every step of every episode reads.
+struct PathSettings {
+  HapticLayout L;
+  double dt = 0, turn_rate = 0;
+  double tau = 0.3;  // s, correlation time of the heading's angular velocity
+  double T = 0;      // approach and leave duration (0: contact only)
+  double tiny = 0;   // a distance below any the mesh resolves
+};
+
+/// One step of the contact phase at time t: turn the heading, predict, follow the surface to the
+/// closest point near the prediction, and move within the band (at most L.max_step).
+void slide_step(const PathSettings& S, const Mesh& mesh, const TriangleGrid& grid, const EpisodeMotion& motion,
+                Rng& rng, double t, ProbeState& s) {
+  const double dt = S.dt, tau = S.tau;
+  s.omega += -s.omega * dt / tau + S.turn_rate * std::sqrt(2 * dt / tau) * rng.normal();
+  const double ang = s.omega * dt;
+  s.dir = s.dir * correctly_rounded::cos(ang) + cross(s.nrm, s.dir) * correctly_rounded::sin(ang);
+  Vec3d tangent = s.dir - s.nrm * dot(s.dir, s.nrm);
+  if (norm(tangent) > 1e-9) s.dir = normalized(tangent);
+  s.vel = s.dir * motion.speed_at(t);
+  const Vec3d pred = s.probe + s.vel * dt;
+  TriangleGrid::Hit hit{};
+  hit.triangle = ~std::uint32_t(0);
+  // The previous closest point is on the surface: the distance is at most r.
+  const double r = norm(pred - s.surf) * (1 + 1e-9) + S.tiny;
+  if (grid.closest(pred, r, &hit)) {
+    const Vec3d u = pred - hit.point;
+    const double d = norm(u);
+    const Vec3d nf = triangle_normal(mesh.vertex(hit.triangle, 0), mesh.vertex(hit.triangle, 1),
+                                     mesh.vertex(hit.triangle, 2));
+    if (d > S.L.band * 1e-6) {
+      s.nrm = u / d * (dot(u, nf) >= 0 ? 1.0 : -1.0);
+    } else if (norm(nf) > 0) {
+      s.nrm = nf;
+    }
+    s.surf = hit.point;
+  }
+  Vec3d next = s.surf + s.nrm * motion.offset_at(t);
+  const Vec3d step = next - s.probe;
+  const double len = norm(step);
+  if (len > S.L.max_step) next = s.probe + step * (S.L.max_step / len);
+  s.probe = next;
+}
+
+/// One episode appended to out (until it holds n points): approach, contact, leave.
+void append_episode(const PathSettings& S, const Mesh& mesh, const AreaSampler& sampler, const TriangleGrid& grid,
+                    double slide, Rng& rng, std::size_t n, std::vector<Vec3d>& out) {
+  const HapticLayout& L = S.L;
+  const double dt = S.dt, T = S.T;
+  ProbeState s = first_contact(mesh, sampler, rng);
+  const EpisodeMotion motion = draw_motion(rng, slide, L.band);
+  s.probe = s.surf + s.nrm * motion.offset_at(0);
+  const Vec3d vel0 = s.dir * motion.speed_at(0);
+
+  // Approach: tau runs from T down to dt; at tau = 0 the probe is at the first contact.
+  for (std::size_t k = 0; k < L.approach && out.size() < n; ++k) {
+    const double tau_k = double(L.approach - k) * dt;
+    out.push_back(s.probe - vel0 * (tau_k - tau_k * tau_k / (2 * T)) +
+                  s.nrm * (L.approach_distance * smoothstep(tau_k / T)));
+  }
+  // Contact: slide, following the surface.
+  s.vel = vel0;
+  for (std::size_t k = 0; k < L.contact && out.size() < n; ++k) {
+    if (k > 0) slide_step(S, mesh, grid, motion, rng, double(k) * dt, s);
+    out.push_back(s.probe);
+  }
+  // Leave: velocity continuous, out along the last outward direction.
+  const Vec3d start = s.probe;
+  for (std::size_t k = 1; k <= L.leave && out.size() < n; ++k) {
+    const double t = double(k) * dt;
+    out.push_back(start + s.vel * (t - t * t / (2 * T)) + s.nrm * (L.approach_distance * smoothstep(t / T)));
+  }
+}
+
 // Both kinds' paths: with approach_and_leave false the episodes are their contact phase alone
 // (the random draws are the same, so the haptic path's bytes do not depend on this option).
 std::vector<Vec3d> probe_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params,
                               bool approach_and_leave) {
-  const HapticLayout L = haptic_layout(mesh, params, approach_and_leave);
-  const double rate = params.get_real("rate_hz"), dt = 1.0 / rate;
-  const double slide = params.get_real("slide_speed") * L.units_per_metre;  // units / s
-  const double turn_rate = params.get_real("turn_rate");
-  const double tau = 0.3;  // s, correlation time of the heading's angular velocity
+  PathSettings S;
+  S.L = haptic_layout(mesh, params, approach_and_leave);
+  S.dt = 1.0 / params.get_real("rate_hz");
+  S.turn_rate = params.get_real("turn_rate");
+  S.T = double(S.L.approach) * S.dt;
+  S.tiny = mesh.bounds().diagonal() * 1e-12;
+  const double slide = params.get_real("slide_speed") * S.L.units_per_metre;  // units / s
   AreaSampler sampler(mesh);
   Progress progress_grid("haptic: triangle grid", 1, mesh.num_triangles() >= 2000000);
-  const TriangleGrid grid(mesh, L.band);
+  const TriangleGrid grid(mesh, S.L.band);
   progress_grid.finish();
   Progress progress("haptic path", double(n), n >= 200000);
   Rng rng(seed);
   std::vector<Vec3d> out;
   out.reserve(n);
-  const double T = double(L.approach) * dt;  // approach and leave duration (0: contact only)
-  const double tiny = mesh.bounds().diagonal() * 1e-12;
-
   while (out.size() < n) {
-    // First contact: an area-weighted surface point, outward along its face normal.
-    const std::uint32_t t0 = sampler.pick(rng.uniform());
-    const Vec3d a = mesh.vertex(t0, 0), b = mesh.vertex(t0, 1), c = mesh.vertex(t0, 2);
-    const double r1 = rng.uniform(), r2 = rng.uniform();
-    Vec3d surf = uniform_in_triangle(a, b, c, r1, r2);
-    Vec3d nrm = triangle_normal(a, b, c);
-    // Heading: a random direction in the tangent plane.
-    Vec3d dir;
-    do {
-      dir = Vec3d(rng.normal(), rng.normal(), rng.normal());
-      dir -= nrm * dot(dir, nrm);
-    } while (!(norm(dir) > 1e-6));
-    dir = normalized(dir);
-    // Smooth speed and band offset for this episode.
-    const double fs = rng.uniform(0.2, 0.8), ps = rng.uniform(0, kTwoPi);
-    const double f1 = rng.uniform(0.3, 1.0), p1 = rng.uniform(0, kTwoPi);
-    const double f2 = rng.uniform(1.5, 4.0), p2 = rng.uniform(0, kTwoPi);
-    // Correctly rounded sin/cos: the path is the same bytes on every machine (correctly_rounded.hpp).
-    auto speed_at = [&](double t) { return slide * (0.6 + 0.4 * correctly_rounded::sin(kTwoPi * fs * t + ps)); };
-    auto offset_at = [&](double t) {
-      return L.band * 0.9 * (0.6 * correctly_rounded::sin(kTwoPi * f1 * t + p1) + 0.4 * correctly_rounded::sin(kTwoPi * f2 * t + p2));
-    };
-    Vec3d probe = surf + nrm * offset_at(0);
-    const Vec3d vel0 = dir * speed_at(0);
-
-    // Approach: tau runs from T down to dt; at tau = 0 the probe is at the first contact.
-    for (std::size_t k = 0; k < L.approach && out.size() < n; ++k) {
-      const double tau_k = double(L.approach - k) * dt;
-      out.push_back(probe - vel0 * (tau_k - tau_k * tau_k / (2 * T)) +
-                    nrm * (L.approach_distance * smoothstep(tau_k / T)));
-    }
-
-    // Contact: slide, following the surface.
-    double omega = 0;
-    Vec3d vel = vel0;
-    for (std::size_t k = 0; k < L.contact && out.size() < n; ++k) {
-      if (k > 0) {
-        const double t = double(k) * dt;
-        omega += -omega * dt / tau + turn_rate * std::sqrt(2 * dt / tau) * rng.normal();
-        const double ang = omega * dt;
-        dir = dir * correctly_rounded::cos(ang) + cross(nrm, dir) * correctly_rounded::sin(ang);
-        Vec3d tangent = dir - nrm * dot(dir, nrm);
-        if (norm(tangent) > 1e-9) dir = normalized(tangent);
-        vel = dir * speed_at(t);
-        const Vec3d pred = probe + vel * dt;
-        TriangleGrid::Hit hit{};
-        hit.triangle = ~std::uint32_t(0);
-        // The previous closest point is on the surface: the distance is at most r.
-        const double r = norm(pred - surf) * (1 + 1e-9) + tiny;
-        if (grid.closest(pred, r, &hit)) {
-          const Vec3d u = pred - hit.point;
-          const double d = norm(u);
-          const Vec3d nf = triangle_normal(mesh.vertex(hit.triangle, 0), mesh.vertex(hit.triangle, 1),
-                                           mesh.vertex(hit.triangle, 2));
-          if (d > L.band * 1e-6) {
-            nrm = u / d * (dot(u, nf) >= 0 ? 1.0 : -1.0);
-          } else if (norm(nf) > 0) {
-            nrm = nf;
-          }
-          surf = hit.point;
-        }
-        Vec3d next = surf + nrm * offset_at(t);
-        const Vec3d step = next - probe;
-        const double len = norm(step);
-        if (len > L.max_step) next = probe + step * (L.max_step / len);
-        probe = next;
-      }
-      out.push_back(probe);
-    }
-
-    // Leave: velocity continuous, out along the last outward direction.
-    const Vec3d start = probe;
-    for (std::size_t k = 1; k <= L.leave && out.size() < n; ++k) {
-      const double t = double(k) * dt;
-      out.push_back(start + vel * (t - t * t / (2 * T)) + nrm * (L.approach_distance * smoothstep(t / T)));
-    }
+    append_episode(S, mesh, sampler, grid, slide, rng, n, out);
     progress.update(double(out.size()));
   }
   progress.finish();
