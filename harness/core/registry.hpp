@@ -33,6 +33,14 @@ enum class StructureSharing {
 };
 
 struct MethodInfo {
+  /// A declaration's first line: the method's name and description; the rest is set field by field.
+  static MethodInfo named(std::string name, std::string description) {
+    MethodInfo m;
+    m.name = std::move(name);
+    m.description = std::move(description);
+    return m;
+  }
+
   std::string name;          ///< [a-z0-9_]+
   std::string description;   ///< one line
   Capabilities caps;

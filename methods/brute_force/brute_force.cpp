@@ -101,9 +101,8 @@ class BruteForce final : public SharedStructureMethod<BruteForceQueries> {
 
 void bvhbench_register_brute_force(bvhbench::Registry& r) {
   using namespace bvhbench;
-  MethodInfo m;
-  m.name = "brute_force";
-  m.description = "Exact reference: every triangle per query, double precision; inside by the generalized winding number";
+  MethodInfo m = MethodInfo::named("brute_force",
+                                   "Exact reference: every triangle per query, double precision; inside by the generalized winding number");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true;
   m.caps.concurrent_queries = true;  // per-thread counters over the shared mesh

@@ -74,16 +74,23 @@ typename K::Point_3 to_point(const Vec3f& v) {
 /// query state takes the difference across each query: its own count, whatever other threads do.
 thread_local std::uint64_t t_triangles_fetched = 0;
 
+/// What both property maps below are: a readable map from triangle index to a Value computed
+/// from the shared geometry (the type names Boost's property_traits read).
+template <class Value>
+struct GeometryMap {
+  using key_type = std::uint32_t;
+  using value_type = Value;
+  using reference = Value;
+  using category = boost::readable_property_map_tag;
+  const Geometry* g = nullptr;
+};
+
 /// Triangle index -> K::Triangle_3, built on the fly from the shared geometry. Each call is one
 /// triangle the library is about to test, so the map also counts them (t_triangles_fetched).
 template <class K>
-struct TriangleMap {
-  using key_type = std::uint32_t;
-  using value_type = typename K::Triangle_3;
-  using reference = value_type;
-  using category = boost::readable_property_map_tag;
-  const Geometry* g = nullptr;
-
+struct TriangleMap : GeometryMap<typename K::Triangle_3> {
+  using typename GeometryMap<typename K::Triangle_3>::value_type;
+  using typename GeometryMap<typename K::Triangle_3>::key_type;
   friend value_type get(const TriangleMap& m, key_type i) {
     ++t_triangles_fetched;
     const auto& t = m.g->triangles[i];
@@ -94,13 +101,9 @@ struct TriangleMap {
 
 /// Triangle index -> a point on it (its first vertex): what the KD-tree indexes for hints.
 template <class K>
-struct ReferencePointMap {
-  using key_type = std::uint32_t;
-  using value_type = typename K::Point_3;
-  using reference = value_type;
-  using category = boost::readable_property_map_tag;
-  const Geometry* g = nullptr;
-
+struct ReferencePointMap : GeometryMap<typename K::Point_3> {
+  using typename GeometryMap<typename K::Point_3>::value_type;
+  using typename GeometryMap<typename K::Point_3>::key_type;
   friend value_type get(const ReferencePointMap& m, key_type i) {
     return to_point<K>(m.g->vertices[m.g->triangles[i][0]]);
   }
@@ -323,8 +326,10 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
         }
       }
 
-      TriangleMap<K> tmap{&s_.geo};
-      ReferencePointMap<K> pmap{&s_.geo};
+      TriangleMap<K> tmap;
+      tmap.g = &s_.geo;
+      ReferencePointMap<K> pmap;
+      pmap.g = &s_.geo;
       s_.tree.insert(boost::counting_iterator<std::uint32_t>(0),
                      boost::counting_iterator<std::uint32_t>(std::uint32_t(nt)), tmap, pmap);
       s_.tree.build();
@@ -390,11 +395,9 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
 void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
   using namespace bvhbench;
   note_library_version("cgal", CGAL_VERSION_STR);
-  MethodInfo m;
-  m.name = "cgal_aabb";
-  m.description =
-      "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
-      "Side_of_triangle_mesh's ray parity on the same tree";
+  MethodInfo m = MethodInfo::named("cgal_aabb",
+                                   "CGAL AABB_tree: closest_point_and_primitive distance (KD-tree or coherent hint); inside by "
+                                   "Side_of_triangle_mesh's ray parity on the same tree");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread hint and counters over the const trees

@@ -193,11 +193,9 @@ class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
 
 void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   using namespace bvhbench;
-  MethodInfo m;
-  m.name = "ebp_octree";
-  m.description =
-      "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
-      "winding-number crossings, branch-and-bound distance";
+  MethodInfo m = MethodInfo::named("ebp_octree",
+                                   "EBP-Octree (Aguilera, Melero, Feito 2016): octree with face-parallel bounding planes; exact inside by "
+                                   "winding-number crossings, branch-and-bound distance");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true;
   m.caps.distance = true;

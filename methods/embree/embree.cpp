@@ -414,11 +414,9 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
 void bvhbench_register_embree(bvhbench::Registry& r) {
   using namespace bvhbench;
   note_library_version("embree", RTC_VERSION_STRING);
-  MethodInfo m;
-  m.name = "embree";
-  m.description =
-      "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
-      "by all-hits ray parity with jittered re-shots and majority vote";
+  MethodInfo m = MethodInfo::named("embree",
+                                   "Embree 3 triangle scene: rtcPointQuery with an exact double closest-point callback; inside "
+                                   "by all-hits ray parity with jittered re-shots and majority vote");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
   m.caps.concurrent_queries = true;  // per-thread query contexts, hit lists and counters over the committed scene

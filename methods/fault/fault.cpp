@@ -76,9 +76,8 @@ class Fault final : public Method {
 
 void bvhbench_register_fault(bvhbench::Registry& r) {
   using namespace bvhbench;
-  MethodInfo m;
-  m.name = "fault";
-  m.description = "Testing only: fails on purpose (crash, abort, hang, oom, throw) to test job isolation";
+  MethodInfo m = MethodInfo::named("fault",
+                                   "Testing only: fails on purpose (crash, abort, hang, oom, throw) to test job isolation");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true;
   m.params = {{"mode", ParamType::choice, ParamRole::query, "none", "what goes wrong", {"none", "crash", "abort", "hang", "oom", "throw"}},

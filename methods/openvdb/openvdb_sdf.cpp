@@ -460,11 +460,9 @@ void bvhbench_register_openvdb(bvhbench::Registry& r) {
   using namespace bvhbench;
   openvdb::initialize();
   note_library_version("openvdb", OPENVDB_LIBRARY_VERSION_STRING);
-  MethodInfo m;
-  m.name = "openvdb";
-  m.description =
-      "OpenVDB signed distance field (meshToVolume): sampled distance, gradient normal and "
-      "projection, inside by sign, closest triangle from the polygon-index grid";
+  MethodInfo m = MethodInfo::named("openvdb",
+                                   "OpenVDB signed distance field (meshToVolume): sampled distance, gradient normal and "
+                                   "projection, inside by sign, closest triangle from the polygon-index grid");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true;
   m.caps.concurrent_queries = true;  // per-thread value accessors over grids nobody writes

@@ -45,9 +45,8 @@ std::string joined(const std::vector<std::string>& v) {
 }
 
 MethodInfo method_info(const py::dict& d, const std::string& folder) {
-  MethodInfo m;
-  m.name = d["name"].cast<std::string>();
-  m.description = d["description"].cast<std::string>() + " [Python]";
+  MethodInfo m = MethodInfo::named(d["name"].cast<std::string>(),
+                                   d["description"].cast<std::string>() + " [Python]");
   py::dict caps = d["capabilities"];
   PythonMethodDeclaration decl;
   decl.name = m.name;
