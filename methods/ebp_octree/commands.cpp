@@ -1,7 +1,7 @@
 // The `bvhbench ebp` group (commands.hpp): its subcommands and what two of them share.
 #include "methods/ebp_octree/commands.hpp"
 
-#include "harness/util/errors.hpp"
+#include "harness/util/key_value.hpp"
 
 namespace bvhbench {
 
@@ -16,12 +16,7 @@ void add_ebp_commands(CLI::App& app) {
 
 std::map<std::string, std::string> parse_param_args(const std::vector<std::string>& kvs) {
   std::map<std::string, std::string> given;
-  for (const std::string& kv : kvs) {
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError("--param " + kv + ": expected key=value");
-    if (given.count(kv.substr(0, eq))) throw InputError("--param " + kv.substr(0, eq) + " given twice");
-    given[kv.substr(0, eq)] = kv.substr(eq + 1);
-  }
+  for (const std::string& kv : kvs) add_key_value(kv, "--param", given);
   return given;
 }
 
