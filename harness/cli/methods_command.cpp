@@ -23,7 +23,8 @@ nlohmann::json method_json(const MethodInfo& m) {
                        {"closest_triangle", m.caps.closest_triangle},
                        {"coherence", m.caps.coherence},
                        {"out_of_core", m.caps.out_of_core},
-                       {"concurrent_queries", m.caps.concurrent_queries}};
+                       {"concurrent_queries", m.caps.concurrent_queries},
+                       {"query_options_after_build", m.caps.query_options_after_build}};
   j["build_threads"] = m.caps.build_threads == BuildThreads::job   ? "job"
                        : m.caps.build_threads == BuildThreads::one ? "one"
                                                                    : "library";
@@ -86,6 +87,7 @@ void add_methods_command(CLI::App& app) {
       add(m.caps.coherence, "coherence");
       add(m.caps.out_of_core, "out-of-core");
       add(m.caps.concurrent_queries, "concurrent-queries");
+      add(m.caps.query_options_after_build, "query-options-after-build");
       std::cout << m.name << (m.testing_only ? " [testing only]" : "") << "\n"
                 << "  " << m.description << "\n"
                 << "  answers: " << (caps.empty() ? "nothing" : caps) << "\n"

@@ -57,6 +57,10 @@ struct Capabilities {
   /// Hands out per-thread query states (Method::new_query_state): runs at threads > 1. Declared
   /// here so that `bvhbench methods` and a suite can tell before building; false by default.
   bool concurrent_queries = false;
+  /// Takes another configuration's query options over its built structure
+  /// (Method::set_query_options): a suite builds once for configurations that differ only in
+  /// options of ParamRole::query (coherent, a vote, a cache budget) and runs them one after another.
+  bool query_options_after_build = false;
   /// What a result records as build.threads: T, 1, or null (the library's own choice).
   BuildThreads build_threads = BuildThreads::one;
 };
@@ -121,6 +125,13 @@ class Method : public QueryState {
   /// concurrently, and a job with threads > 1 is `unsupported`. A method that returns states
   /// declares Capabilities::concurrent_queries.
   virtual std::unique_ptr<QueryState> new_query_state() const { return nullptr; }
+
+  /// The query options (ParamRole::query) of another configuration of this method, whose build
+  /// options are this one's: the queries and query states that follow ask as it would, over the
+  /// structure already built, with fresh path state and counters. Called after build(), between
+  /// jobs, never during queries. A method that overrides it declares
+  /// Capabilities::query_options_after_build; the default throws std::logic_error.
+  virtual void set_query_options(const Params& params);
 
   /// Bytes of the method's own structure, including its copy of the geometry.
   virtual std::size_t structure_bytes() const = 0;

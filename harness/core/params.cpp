@@ -210,8 +210,15 @@ std::map<std::string, std::string> Params::values() const {
 }
 
 std::string Params::non_default_string() const {
+  std::set<std::string> every;
+  for (const auto& kv : values_) every.insert(kv.first);
+  return non_default_string(every);
+}
+
+std::string Params::non_default_string(const std::set<std::string>& only) const {
   std::string s;
   for (auto& [k, v] : values_) {
+    if (!only.count(k)) continue;
     auto d = defaults_.find(k);
     if (d != defaults_.end() && d->second == v) continue;
     s += (s.empty() ? "" : ",") + k + "=" + v.canonical();

@@ -9,6 +9,7 @@
 /// gets, a suite's sweeps and its check of a query set's parameters.
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,8 @@ class Params {
   bool given(const std::string& key) const { return given_.count(key) != 0; }
   /// Values that differ from the defaults, "k=v,k=v" sorted by key, canonical ("" when all default).
   std::string non_default_string() const;
+  /// The same, of the options named in `only`.
+  std::string non_default_string(const std::set<std::string>& only) const;
   /// Every option's canonical text, by key (what results record as job.params).
   std::map<std::string, std::string> values() const;
   /// The options the user gave, as typed (not canonical).

@@ -1,6 +1,7 @@
 #include "harness/core/registry.hpp"
 
 #include <algorithm>
+#include <set>
 #include <stdexcept>
 
 #include "harness/util/errors.hpp"
@@ -18,6 +19,19 @@ QueryType parse_query_type(const std::string& s) {
 bool QueryState::inside(const Vec3d&) { throw UnsupportedError("inside queries are not supported"); }
 DistanceResult QueryState::distance(const Vec3d&) {
   throw UnsupportedError("distance queries are not supported");
+}
+
+void Method::set_query_options(const Params&) {
+  throw std::logic_error("set_query_options on a method that does not declare query_options_after_build");
+}
+
+std::string structure_key(const MethodSpec& spec) {
+  if (!spec.resolved()) return std::string();
+  if (!spec.info->caps.query_options_after_build) return spec.params_key();
+  std::set<std::string> build_options;
+  for (const ParamSpec& p : spec.info->params)
+    if (p.role == ParamRole::build) build_options.insert(p.name);
+  return spec.params.non_default_string(build_options);
 }
 
 bool answers(const MethodInfo& info, const Method& method, QueryType q) {

@@ -78,6 +78,11 @@ struct MethodInfo {
   std::function<StructureSharing(const Params&)> sharing;
 };
 
+/// The options that shape the structure of `spec`, "k=v,k=v" off their defaults (as
+/// MethodSpec::params_key): its build options alone for a method that takes query options after
+/// its build (Capabilities::query_options_after_build), else every option. "" when unresolved.
+std::string structure_key(const MethodSpec& spec);
+
 /// Whether `method`, an instance of `info`, answers `q`: the registered capability, narrowed by
 /// the instance (Method::supports).
 bool answers(const MethodInfo& info, const Method& method, QueryType q);

@@ -13,7 +13,7 @@ std::string build_group_id(const JobPlan& job) {
   if (!m.resolved()) return job.id;
   const StructureSharing sharing = m.info->sharing ? m.info->sharing(m.params) : StructureSharing::every_job;
   if (sharing == StructureSharing::job_alone) return job.id;
-  const std::string key = m.params_key();
+  const std::string key = structure_key(m);  // configurations that differ in how they ask share one
   std::string id = job.mesh.name + "__" + m.info->name + (key.empty() ? "" : "-" + key) +
                    (job.threads == 1 ? "" : "__t" + std::to_string(job.threads));
   if (sharing == StructureSharing::same_query_type) id += std::string("__") + to_string(job.query);

@@ -5,8 +5,10 @@
 /// StructureSharing): the same query type when its build reads the query type, each job alone
 /// when its build reads the query points or its queries leave state a later job would inherit.
 ///
-/// Query options are part of the key too: a method is created with all of its options and has no
-/// way to change one on a built structure, so `coherent=true` is a structure of its own.
+/// "The same options" are its build options alone for a method that takes query options after
+/// its build (Capabilities::query_options_after_build: the EBP-Octree in memory, CGAL, Embree):
+/// `coherent=true` asks the structure of the plain configuration another way, so both share one
+/// build. Every other method is created with all of its options, each configuration a structure.
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -20,7 +22,7 @@ struct BuildGroup {
   std::vector<std::size_t> jobs;  ///< indexes into the job list, in its order
 };
 
-/// The group id of a job: "MESH__METHOD[-k=v,..][__tT][__QUERY]", or the job's id when it builds
+/// The group id of a job: "MESH__METHOD[-k=v,..][__tT][__QUERY]" (k=v: structure_key), or the job's id when it builds
 /// alone (and for a method this build does not know).
 std::string build_group_id(const JobPlan& job);
 

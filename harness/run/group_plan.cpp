@@ -43,8 +43,13 @@ GroupPlanJob job_from_json(const json& j) {
   return g;
 }
 
+/// One structure: the same method and structure options (structure_key: query options may
+/// differ where the method takes them after its build), mesh, threads and repeat.
 bool same_structure(const JobSpec& a, const JobSpec& b) {
-  return a.mesh_path == b.mesh_path && a.method.text == b.method.text && a.threads == b.threads && a.repeat == b.repeat;
+  const bool same_method = a.method.resolved() && b.method.resolved()
+                               ? a.method.info == b.method.info && structure_key(a.method) == structure_key(b.method)
+                               : a.method.text == b.method.text;
+  return a.mesh_path == b.mesh_path && same_method && a.threads == b.threads && a.repeat == b.repeat;
 }
 
 }  // namespace

@@ -141,6 +141,7 @@ struct GroupJob {
   bool probes = false;
   std::vector<std::vector<Vec3d>> probe_points;  // probes: every thread's path (path 0 = the set's)
   bool done = false;                             // the result is final
+  InsideDefinition inside;  // its configuration's definition of inside (inside_definition.hpp)
 };
 
 /// What the jobs share: the method, the mesh's facts, the build's block.
@@ -148,7 +149,7 @@ class GroupRun {
  public:
   GroupRun(const std::vector<JobSpec>& specs, std::string build_id, const GroupHooks& hooks)
       : build_id_(std::move(build_id)), hooks_(hooks) {
-    for (const JobSpec& s : specs) jobs_.push_back(GroupJob{&s, make_result(s, status::ok, ""), {}, false, {}, false});
+    for (const JobSpec& s : specs) jobs_.push_back(GroupJob{&s, make_result(s, status::ok, ""), {}, false, {}, false, {}});
   }
 
   /// The whole group; a failure of a shared step ends every unfinished job with it.
@@ -215,14 +216,30 @@ class GroupRun {
     // Created first: an unresolved spec (an unknown method, a bad option) throws its own message here.
     method_ = apply_test_slowdown(Registry::global().create(spec), spec.name);  // unset: itself
     info_ = spec.info;
-    inside_ = resolve_inside(info_->inside, spec.params);
+    applied_options_ = spec.params.non_default_string();
+    // Each job's own configuration: its options differ from the first's in query options at most
+    // (build_groups.hpp), which set_query_options gives the method before its queries.
     for (GroupJob& j : jobs_) {
+      const Params& params = j.spec->method.params;
+      j.inside = resolve_inside(info_->inside, params);
       j.r["job"]["method"] = info_->name;
-      j.r["job"]["params"] = spec.params.values();
-      j.r["job"]["params_key"] = spec.params.non_default_string();
-      j.r["job"]["inside"] = inside_.to_json();  // what its inside means, judged below (accuracy.hpp)
+      j.r["job"]["params"] = params.values();
+      j.r["job"]["params_key"] = params.non_default_string();
+      j.r["job"]["inside"] = j.inside.to_json();  // what its inside means, judged below (accuracy.hpp)
       j.r["context"] = run_context();  // registration may have noted library versions
     }
+  }
+
+  /// The method asks as job k's configuration does (its query options), when another asked last.
+  void apply_query_options(const GroupJob& j) {
+    const Params& params = j.spec->method.params;
+    const std::string key = params.non_default_string();
+    if (key == applied_options_) return;
+    if (!info_->caps.query_options_after_build)
+      throw std::logic_error("jobs of different options grouped for " + info_->name +
+                             ", which does not take query options after its build");
+    method_->set_query_options(params);
+    applied_options_ = key;
   }
 
   /// The job's query set, and whether the method answers its queries as asked.
@@ -336,6 +353,7 @@ class GroupRun {
     const JobSpec& spec = *j.spec;
     if (hooks_.job_starts) hooks_.job_starts(k);
     record_build(k);
+    apply_query_options(j);
     const bool peak_reset = reset_peak_rss();
     const std::size_t n = j.qs.points.size();
     // With T > 1 each timed pass is followed by a pass on one thread (the same set, or probe 0's
@@ -363,7 +381,7 @@ class GroupRun {
                      {"mesh_bytes", mesh_bytes_}};
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
     if (!spec.truth_path.empty()) {
-      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_, inside_,
+      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_, j.inside,
                                          j.qs.points);
       // Where the method is fast and where slow: the query set's latencies by the oracle's
       // distance to the surface (none in batches: no query has a latency of its own).
@@ -386,7 +404,7 @@ class GroupRun {
   const GroupHooks& hooks_;
   std::vector<GroupJob> jobs_;
   const MethodInfo* info_ = nullptr;
-  InsideDefinition inside_;  ///< the method's definition of inside as configured (inside_definition.hpp)
+  std::string applied_options_;  ///< the configuration the method asks as now (params_key)
   std::unique_ptr<Method> method_;
   double diagonal_ = 0;
   std::string mesh_sha256_;

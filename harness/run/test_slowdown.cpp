@@ -68,6 +68,7 @@ class SlowedMethod final : public SlowedQueries<Method>, public BatchAnswers {
     inner_->build(mesh, ctx);
   }
   bool supports(QueryType q) const override { return inner_->supports(q); }
+  void set_query_options(const Params& params) override { inner_->set_query_options(params); }
   bool answers_in_batches() const override { return batch_answers(*inner_) != nullptr; }
   void inside_batch(const std::vector<Vec3d>& points, std::vector<std::uint8_t>& inside) override {
     for (std::size_t i = 0; i < points.size(); ++i) extra_work(units_);

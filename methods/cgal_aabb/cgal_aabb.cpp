@@ -163,9 +163,9 @@ class CountingProjectionTraits : public CGAL::internal::AABB_tree::Projection_tr
 };
 
 struct Options {
-  std::string kernel;
-  bool kd_tree = true;
-  bool coherent = false;
+  std::string kernel;     // build
+  bool kd_tree = true;    // build
+  bool coherent = false;  // query
 };
 
 /// The built structure, shared read-only by every thread's queries (CGAL's AABB_tree and its
@@ -307,6 +307,12 @@ class CgalAabb final : public SharedStructureMethod<CgalQueries<K>> {
     }
   }
 
+  /// The trees stay; the next queries hint as `params` say, from a fresh state.
+  void set_query_options(const Params& params) override {
+    s_.opt.coherent = params.get_bool("coherent");
+    this->start_queries();
+  }
+
   void build(const Mesh& mesh, const BuildContext& ctx) override {
     if (mesh.triangles.empty()) throw InputError("cgal_aabb: the mesh has no triangle");
     try {
@@ -400,6 +406,7 @@ void bvhbench_register_cgal_aabb(bvhbench::Registry& r) {
                                    "Side_of_triangle_mesh's ray parity on the same tree");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
+  m.caps.query_options_after_build = true;  // coherent is read by the queries alone
   m.caps.concurrent_queries = true;  // per-thread hint and counters over the const trees
   // None: CGAL is header-only and compiled here with our flags, with no run-time CPU dispatch;
   // the traversal and its filtered predicates run in plain double (interval filters under our

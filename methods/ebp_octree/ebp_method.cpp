@@ -170,6 +170,13 @@ class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
     tree_ = build_tree(mesh, build_params(params_, ctx.threads), ctx.progress);
     start_queries();
   }
+  /// The tree stays; the next queries ask as `params` say (coherent, certificates, chained
+  /// sign), from a fresh state. Its build options are the tree's own (build_groups.hpp).
+  void set_query_options(const Params& params) override {
+    params_ = params;
+    coherent_ = params.get_bool("coherent");
+    start_queries();
+  }
   /// The tree and one query's stamps (every further thread's query state holds as many again).
   std::size_t structure_bytes() const override {
     return tree_.bytes() + tree_.derived_bytes() +
@@ -205,6 +212,9 @@ void bvhbench_register_ebp_octree(bvhbench::Registry& r) {
   // In memory one ebp::Query per thread over the const tree; out of core one page cache per thread
   // over the shared store reader (ooc_method.cpp says why).
   m.caps.concurrent_queries = true;
+  // In memory the query options (coherent, certificates, chained sign) are read by the queries
+  // alone; a store's jobs run each alone (sharing, below), so they are never asked to.
+  m.caps.query_options_after_build = true;
   m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   m.machine_dependent_counters = {};  // none: our own traversal, compiled with the build's flags
   m.params = ebp_params();

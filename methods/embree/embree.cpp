@@ -62,11 +62,17 @@ constexpr int kDirections = 64;    ///< fixed table of ray directions (determini
 constexpr int kMaxAttempts = 8;    ///< rays per vote before giving up on a degenerate-free one
 
 struct Options {
-  std::string quality = "medium";
-  bool robust = true;
-  int rays = 1;
-  bool coherent = false;
+  std::string quality = "medium";  // build
+  bool robust = true;              // build
+  int rays = 1;                    // query
+  bool coherent = false;           // query
 };
+
+/// The options of ParamRole::query: what set_query_options changes on a built scene.
+void read_query_options(const Params& p, Options& o) {
+  o.rays = int(p.get_int("rays"));
+  o.coherent = p.get_bool("coherent");
+}
 
 /// State of one point query, handed to the callback through userPtr.
 struct PointQueryState {
@@ -313,6 +319,12 @@ class Embree final : public SharedStructureMethod<EmbreeQueries> {
     }
   }
 
+  /// The scene stays; the next queries vote and hint as `params` say, from a fresh state.
+  void set_query_options(const Params& params) override {
+    read_query_options(params, s_->opt);
+    start_queries();
+  }
+
   ~Embree() override {
     if (s_->scene) rtcReleaseScene(s_->scene);
     if (s_->device) rtcReleaseDevice(s_->device);
@@ -419,6 +431,7 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
                                    "by all-hits ray parity with jittered re-shots and majority vote");
   // Capabilities, said once here (false unless set).
   m.caps.inside = true; m.caps.distance = true; m.caps.closest_triangle = true; m.caps.coherence = true;
+  m.caps.query_options_after_build = true;  // rays and coherent are read by the queries alone
   m.caps.concurrent_queries = true;  // per-thread query contexts, hit lists and counters over the committed scene
   m.caps.build_threads = BuildThreads::job;  // builds on the job's threads (TBB or the device's)
   // Embree picks its kernels (SSE2, SSE4.2, AVX, AVX2, AVX-512) from the processor when the
@@ -462,8 +475,7 @@ void bvhbench_register_embree(bvhbench::Registry& r) {
     Options o;
     o.quality = p.get("quality");
     o.robust = p.get_bool("robust");
-    o.rays = int(p.get_int("rays"));
-    o.coherent = p.get_bool("coherent");
+    read_query_options(p, o);
     return std::make_unique<Embree>(o);
   };
   r.add(std::move(m));

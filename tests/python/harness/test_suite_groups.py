@@ -79,6 +79,45 @@ def test_the_jobs_of_one_structure_share_one_child_and_one_build(tmp_path):
     assert re.search(r"suite groups: 12 job\(s\) to run, 3 build\(s\): expected ~", p.stderr), p.stderr
 
 
+def test_configurations_that_differ_in_query_options_share_one_build(tmp_path):
+    """coherent is a query option of the EBP-Octree, CGAL and Embree (they take it after their
+    build): the plain and coherent configurations share one build; each job records its own
+    configuration and counts exactly what the same job run alone counts."""
+    methods = ["ebp_octree", "ebp_octree:coherent=true", "embree", "embree:coherent=true,rays=3",
+               "ebp_octree:leaf_factor=8"]
+    suite = write_suite(tmp_path / "qopts.yml", methods, queries=("haptic",), truth=True)
+    out = tmp_path / "out"
+    p = run_suite(suite, out)
+    assert p.returncode == 0, p.stderr
+    res = by_spec_query(results(out))
+    assert len(res) == 10 and all(r["status"] == "ok" for r in res.values()), \
+        [r["message"] for r in res.values()]
+    ids = {spec: {res[(spec, "haptic", q)]["build"]["id"] for q in ("inside", "distance")} for spec in methods}
+    assert ids["ebp_octree"] == ids["ebp_octree:coherent=true"] == {"cow__ebp_octree"}
+    assert ids["embree"] == ids["embree:coherent=true,rays=3"] == {"cow__embree"}
+    assert ids["ebp_octree:leaf_factor=8"] == {"cow__ebp_octree-leaf_factor=8"}  # a build option: its own
+    assert {res[("ebp_octree", "haptic", "inside")]["build"]["jobs"]} == {4}
+    assert "10 job(s) to run, 3 build(s)" in p.stderr
+    for spec in methods:
+        for q in ("inside", "distance"):
+            r = res[(spec, "haptic", q)]
+            given = dict(kv.split("=") for kv in spec.partition(":")[2].split(",") if kv)
+            assert r["job"]["params_key"] == spec.partition(":")[2]
+            for k, v in given.items():
+                assert r["job"]["params"][k] == v
+            assert r["accuracy"]["inside" if q == "inside" else "distance"]["wrong_far" if q == "inside"
+                                                                           else "sign_wrong"] == 0
+    # Counters as the job alone counts them: the shared build asks exactly as its own would.
+    for spec, q in [("ebp_octree:coherent=true", "distance"), ("embree:coherent=true,rays=3", "inside")]:
+        shared = res[(spec, "haptic", q)]
+        alone = tmp_path / f"alone-{q}.json"
+        p = subprocess.run([str(EXE), "--quiet", "run", "--mesh", str(COW), "--method", spec,
+                            "--queries", shared["job"]["queries"]["path"], "--query", q, "--repeat", "1",
+                            "--out", str(alone)], capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        assert json.loads(alone.read_text())["counters"] == shared["counters"], spec
+
+
 def test_a_crash_in_one_job_ends_only_its_group(tmp_path):
     suite = write_suite(tmp_path / "crash.yml", ["fault:mode=crash", "brute_force"], queries=("random", "haptic"),
                         query="[inside]", truth=True)

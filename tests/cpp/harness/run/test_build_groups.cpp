@@ -86,3 +86,24 @@ TEST(BuildGroups, ThreadsAreAStructureOfTheirOwn) {
   EXPECT_EQ(groups[1].id, "a__ebp_octree__t2");
   EXPECT_EQ(ids(cfg, groups[1]).size(), 2u);
 }
+
+TEST(BuildGroups, QueryOptionsShareTheStructureWhereTheMethodTakesThemAfterItsBuild) {
+  TmpDir d;
+  // coherent is a query option of the EBP-Octree and Embree, which take it after their build;
+  // leaf_factor is a build option. brute_force's winding_threshold is a query option too, but
+  // brute_force does not take options after its build: each configuration is its own structure.
+  const SuiteConfig cfg = suite_of(d, "[ebp_octree, \"ebp_octree:coherent=true\", \"ebp_octree:leaf_factor=8\", "
+                                      "\"embree:coherent=true\", \"embree:rays=3\", "
+                                      "\"brute_force:winding_threshold=0.4\", brute_force]");
+  const std::vector<BuildGroup> groups = group_by_structure(cfg.jobs);
+  std::vector<std::string> group_ids;
+  for (const BuildGroup& g : groups) group_ids.push_back(g.id);
+  EXPECT_EQ(group_ids, (std::vector<std::string>{"a__ebp_octree", "a__ebp_octree-leaf_factor=8", "a__embree",
+                                                 "a__brute_force-winding_threshold=0.4", "a__brute_force",
+                                                 "b__ebp_octree", "b__ebp_octree-leaf_factor=8", "b__embree",
+                                                 "b__brute_force-winding_threshold=0.4", "b__brute_force"}));
+  EXPECT_EQ(groups[0].jobs.size(), 8u);  // plain and coherent x 2 query sets x 2 types
+  EXPECT_EQ(groups[2].jobs.size(), 8u);
+  EXPECT_EQ(groups[1].jobs.size(), 4u);
+  EXPECT_EQ(groups[3].jobs.size(), 4u);
+}
