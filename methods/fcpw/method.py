@@ -20,6 +20,7 @@ rescale=false gives fcpw the coordinates as given, to show the library's own beh
 """
 import fcpw  # here, not in build(): the import is not the structure's build time
 import numpy as np
+from bvhbench_method_support import power_of_two_scale, unit_face_normals  # the host's folder (python_host/)
 
 DESCRIPTION = ("fcpw: BVH closest point and contains (float32; contains needs a watertight mesh; "
                "coordinates rescaled by a power of two for its absolute ray epsilon)")
@@ -59,10 +60,7 @@ class Method:
         if not len(F):
             raise NotImplementedError("fcpw cannot build a scene of no triangles")
         self.fcpw = fcpw
-        self.scale = 1.0
-        side = float(np.max(V.max(axis=0) - V.min(axis=0)))
-        if self.rescale and side > 0:
-            self.scale = 2.0 ** round(np.log2(RESCALED_SIZE / side))
+        self.scale = power_of_two_scale(V, RESCALED_SIZE) if self.rescale else 1.0
         # float32(x) * 2^k == float32(x * 2^k): the same rounding as the mesh as given.
         self.V = np.asfortranarray(V * self.scale, dtype=np.float32)
         self.F = np.asfortranarray(F, dtype=np.int32)
@@ -71,11 +69,8 @@ class Method:
         self.scene.set_object_vertices(self.V, 0)
         self.scene.set_object_triangles(self.F, 0)
         self.scene.build(getattr(fcpw.aggregate_type, self.aggregate), self.vectorize)
-        tri = V[F]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(V[F])
         self.interaction = fcpw.interaction_3D()
 
     def inside_one(self, p):

@@ -12,6 +12,7 @@ only: the harness's read-only query array is copied (as gpytoolbox's own functio
 """
 import gpytoolbox as gp  # here, not in build(): the import is not the structure's build time
 import numpy as np
+from bvhbench_method_support import unit_face_normals  # the host's folder (python_host/)
 
 DESCRIPTION = ("gpytoolbox: libigl AABB squared_distance (precomputed tree, double); sign and "
                "inside by the fast winding number (approximate near the surface)")
@@ -43,11 +44,8 @@ class Method:
         self.F = np.ascontiguousarray(F, dtype=np.int32)
         self.tree = gp.squared_distance_precompute(self.V, self.F)
         self.fwn = gp.fast_winding_number_precompute(self.V, self.F, order=self.order)
-        tri = self.V[self.F]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(self.V[self.F])
 
     def inside(self, P):
         return np.reshape(self.fwn.winding_number(np.array(P, dtype=np.float64), self.accuracy_scale), -1) > 0.5

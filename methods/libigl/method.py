@@ -12,6 +12,7 @@ costs are what a Python user of libigl pays, and what the rows measure.
 """
 import igl  # here, not in build(): the import is not the structure's build time
 import numpy as np
+from bvhbench_method_support import unit_face_normals  # the host's folder (python_host/)
 
 DESCRIPTION = ("libigl (Python bindings): AABB closest point built once; sign and inside by "
                "exact winding number, fast winding number or pseudonormal")
@@ -64,10 +65,7 @@ class Method:
         if len(self.F):
             self.tree.init(self.V, self.F)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        tri = self.V[self.F] if len(self.F) else np.zeros((0, 3, 3))
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(self.V[self.F] if len(self.F) else np.zeros((0, 3, 3)))
         if self.sign_type == "fast_winding_number" and len(self.F):
             self.fwn = igl.FastWindingNumberBVH()
             self.fwn.init(self.V, self.F, self.order)

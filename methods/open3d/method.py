@@ -16,6 +16,7 @@ a ray (as trimesh's contains does): on an open surface a ray from afar may cross
 of times, and nothing outside the box is inside whatever the mesh.
 """
 import numpy as np
+from bvhbench_method_support import unit_face_normals  # the host's folder (python_host/)
 
 # Here, not in build(): the import (seconds) is not the structure's build time. A module that
 # cannot be imported in this process (docs/peers.md, "Open3D inside the runner") makes the method
@@ -63,11 +64,8 @@ class Method:
         first = self._points(self.V32[:1])
         self.scene.compute_closest_points(first, nthreads=1)
         self.scene.compute_occupancy(first, nthreads=1, nsamples=self.nsamples)
-        tri = V[F]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(V[F])
         self.lo, self.hi = V.min(axis=0), V.max(axis=0)
 
     def _occupied(self, P, Q):

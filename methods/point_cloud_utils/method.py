@@ -19,6 +19,7 @@ reproductions):
   diagonal off on cow.obj), so a single point is asked as two equal rows and the first answer kept.
 """
 import numpy as np
+from bvhbench_method_support import unit_face_normals  # the host's folder (python_host/)
 import point_cloud_utils as pcu  # here, not in build(): the import is not the structure's build time
 
 DESCRIPTION = ("point-cloud-utils: closest_points_on_mesh (libigl AABB built per call, double), "
@@ -58,11 +59,8 @@ class Method:
     def build(self, V, F):
         self.V = np.ascontiguousarray(V, dtype=np.float64)
         self.F = np.ascontiguousarray(F, dtype=np.int64)
-        tri = self.V[self.F]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(self.V[self.F])
 
     def inside(self, P):
         Q = _rows(P)

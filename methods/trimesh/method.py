@@ -20,6 +20,7 @@ rescale=false gives trimesh the coordinates as given, to show the library's own 
 import importlib.util
 
 import numpy as np
+from bvhbench_method_support import power_of_two_scale, unit_face_normals  # the host's folder (python_host/)
 import trimesh  # here, not in build(): the import (seconds) is not the structure's build time
 from trimesh.ray import ray_triangle
 
@@ -62,10 +63,7 @@ class Method:
     def build(self, V, F):
         if not len(F):
             raise NotImplementedError("trimesh cannot answer on an empty mesh")
-        self.scale = 1.0
-        side = float(np.max(V.max(axis=0) - V.min(axis=0)))
-        if self.rescale and side > 0:
-            self.scale = 2.0 ** round(np.log2(RESCALED_SIZE / side))
+        self.scale = power_of_two_scale(V, RESCALED_SIZE) if self.rescale else 1.0
         self.mesh = trimesh.Trimesh(vertices=V * self.scale, faces=F, process=False, validate=False)
         if self.ray_backend == "embree":
             self.ray = ray_pyembree.RayMeshIntersector(self.mesh)
@@ -73,11 +71,8 @@ class Method:
         else:
             self.ray = ray_triangle.RayMeshIntersector(self.mesh)
         self.mesh.triangles_tree  # noqa: B018  the rtree on_surface searches, built here
-        tri = self.mesh.triangles / self.scale
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        self.face_normals = unit_face_normals(self.mesh.triangles / self.scale)
 
     def inside(self, P):
         return self.ray.contains_points(P * self.scale)

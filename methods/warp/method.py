@@ -39,6 +39,7 @@ On the CPU nothing is copied and there are no such counters.
 import time
 
 import numpy as np
+from bvhbench_method_support import unit_face_normals  # the host's folder (python_host/)
 import warp as wp  # here, not in build(): the import is not the structure's build time
 
 wp.config.log_level = wp.LOG_WARNING  # Warp's banner and per-module lines would go to the runner's output
@@ -185,11 +186,9 @@ class Method:
                             support_winding_number=self.sign == "winding_number",
                             bvh_constructor=self.bvh_constructor, bvh_leaf_size=self.bvh_leaf_size)
         wp.synchronize_device(self.device)
-        tri = V[F]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1)
         # The harness's normal: the closest triangle's unit face normal (b - a) x (c - a).
-        self.face_normals = np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
+        tri = V[F]
+        self.face_normals = unit_face_normals(tri)
         # Warp's sliver test (float32, as Warp computes it; 0/0 for a point is no sliver there).
         T = self.V32[F]
         e0, e1, e2 = T[:, 1] - T[:, 0], T[:, 2] - T[:, 0], T[:, 2] - T[:, 1]
