@@ -210,15 +210,18 @@ std::map<std::string, std::string> Params::values() const {
 }
 
 std::string Params::non_default_string() const {
-  std::set<std::string> every;
-  for (const auto& kv : values_) every.insert(kv.first);
-  return non_default_string(every);
+  return non_default_where([](const std::string&) { return true; });
 }
 
 std::string Params::non_default_string(const std::set<std::string>& only) const {
+  return non_default_where([&](const std::string& key) { return only.count(key) != 0; });
+}
+
+template <class Keep>
+std::string Params::non_default_where(Keep keep) const {
   std::string s;
   for (auto& [k, v] : values_) {
-    if (!only.count(k)) continue;
+    if (!keep(k)) continue;
     auto d = defaults_.find(k);
     if (d != defaults_.end() && d->second == v) continue;
     s += (s.empty() ? "" : ",") + k + "=" + v.canonical();

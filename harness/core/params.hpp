@@ -90,6 +90,10 @@ class Params {
   const std::map<std::string, std::string>& given() const { return given_; }
 
  private:
+  /// non_default_string() of the options `keep(name)` accepts.
+  template <class Keep>
+  std::string non_default_where(Keep keep) const;
+
   std::map<std::string, ParamValue> values_;
   std::map<std::string, std::string> given_;
   std::map<std::string, ParamValue> defaults_;
