@@ -197,18 +197,15 @@ def test_the_estimate_is_printed_without_running(tmp_path):
     assert not (out / "runs").exists()
 
 
-def expected_seconds(stderr: str) -> float:
-    m = re.search(r"expected ~(?:(\d+)h)?(?:(\d+)m)?(?:(\d+)s)?", stderr)
-    assert m, stderr
-    h, mnt, s = (int(g) if g else 0 for g in m.groups())
-    return 3600 * h + 60 * mnt + s
-
-
 def test_the_paper_suite_is_priced_at_its_size_before_its_data_exists(tmp_path):
     # Whether the paper's meshes exist yet or not: their headers, else the preset's declared sizes.
+    # The figure itself comes from timings on disk (results/*/ of this checkout among them): it is
+    # not asserted here. That a larger mesh is priced higher, and that a preset's declared size is
+    # read, are the C++ tests' (tests/cpp/harness/run/test_suite_estimate.cpp), on fixed observations.
     p = subprocess.run([str(EXE), "suite", str(ROOT / "suites" / "paper.yml"), "--out", str(tmp_path / "paper"),
                         "--estimate"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "of unknown size" not in p.stderr, p.stderr
-    # 60 jobs over two 32M-triangle models: minutes at the least, never seconds.
-    assert expected_seconds(p.stderr) >= 10 * 60, p.stderr
+    # Two 32M-triangle models: each in-memory structure once per model (CGAL's per query type, the
+    # coherent variants on the same build), OpenVDB and the stores per job.
+    assert re.search(r"suite paper: 76 job\(s\) to run, 36 build\(s\): expected ~\S+", p.stderr), p.stderr
