@@ -20,7 +20,6 @@ step detection, on log values, so a step is a ratio), with a penalty per step sc
 series' own noise (the median absolute difference of consecutive points): a deterministic
 instruction count shows every real step, a noisy rate only the ones that stand out.
 """
-import argparse
 import hashlib
 import json
 import math
@@ -28,8 +27,9 @@ import statistics
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "plots"))
+sys.path[:0] = [str(Path(__file__).resolve().parents[1] / "plots"), str(Path(__file__).resolve().parent)]
 import results_io  # noqa: E402  (every reader of results goes through it)
+from tool_cli import tool_parser  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -206,8 +206,7 @@ def report(history, out):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    ap = tool_parser(__doc__)
     sub = ap.add_subparsers(dest="cmd", required=True)
     p = sub.add_parser("append")
     p.add_argument("results")

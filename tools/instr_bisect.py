@@ -28,6 +28,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tool_cli import tool_parser  # noqa: E402  (beside this file)
+
 ROOT = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve()
 
@@ -84,8 +87,7 @@ def step(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    ap = tool_parser(__doc__)
     ap.add_argument("--good", required=True)
     ap.add_argument("--bad", required=True)
     ap.add_argument("--job", required=True, help="a job id of suites/ci_instructions.yml (any name with --measure-cmd)")

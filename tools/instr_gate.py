@@ -20,7 +20,6 @@ Exit: 0 nothing gating changed; 1 a job got slower by >= --fail, is missing or f
 2 a broken run (no valgrind, no binary, a job that did not run, a bad file).
 docs/compare.md says how to wire it into CI.
 """
-import argparse
 import concurrent.futures
 import datetime
 import hashlib
@@ -30,6 +29,9 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tool_cli import tool_parser  # noqa: E402  (beside this file)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_EXE = os.environ.get("BVHBENCH_EXE", str(ROOT / "build" / "bvhbench"))
@@ -436,8 +438,7 @@ def cmd_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    ap = tool_parser(__doc__)
     sub = ap.add_subparsers(dest="cmd", required=True)
 
     def common(p, out_default):

@@ -39,9 +39,6 @@ PARAMETERS = [
              "(false: the coordinates as given)"},
 ]
 
-# The size the mesh is scaled to (its box's largest side, within a factor of two).
-RESCALED_SIZE = 1024.0
-
 # contains(): the parity of a ray's crossings, on a watertight (closed) mesh.
 INSIDE = [{"definition": "ray_parity", "contract": "closed"}]
 
@@ -60,7 +57,7 @@ class Method:
         if not len(F):
             raise NotImplementedError("fcpw cannot build a scene of no triangles")
         self.fcpw = fcpw
-        self.scale = power_of_two_scale(V, RESCALED_SIZE) if self.rescale else 1.0
+        self.scale = power_of_two_scale(V) if self.rescale else 1.0
         # float32(x) * 2^k == float32(x * 2^k): the same rounding as the mesh as given.
         self.V = np.asfortranarray(V * self.scale, dtype=np.float32)
         self.F = np.asfortranarray(F, dtype=np.int32)

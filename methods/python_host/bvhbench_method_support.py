@@ -13,7 +13,13 @@ def unit_face_normals(triangles):
     return np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
 
 
-def power_of_two_scale(V, size):
+# The size a rescaled mesh is brought to (its box's largest side, within a factor of two): large
+# enough that a library's absolute tolerances are small against its triangles. (The `rescale`
+# option that asks for it is declared in each method's PARAMETERS, which must stay a literal.)
+RESCALED_SIZE = 1024.0
+
+
+def power_of_two_scale(V, size=RESCALED_SIZE):
     """2^k that brings the largest side of the box of V within a factor of two of `size`; 1 for a
     box of no extent. A power of two scales float32 and float64 coordinates exactly:
     float32(x) * 2^k == float32(x * 2^k)."""

@@ -42,9 +42,6 @@ PARAMETERS = [
              "models (false: the coordinates as given)"},
 ]
 
-# The size the mesh is scaled to (its box's largest side, within a factor of two).
-RESCALED_SIZE = 1024.0
-
 # contains_points: the parity of a ray's crossings, on a watertight (closed) mesh.
 INSIDE = [{"definition": "ray_parity", "contract": "closed"}]
 
@@ -63,7 +60,7 @@ class Method:
     def build(self, V, F):
         if not len(F):
             raise NotImplementedError("trimesh cannot answer on an empty mesh")
-        self.scale = power_of_two_scale(V, RESCALED_SIZE) if self.rescale else 1.0
+        self.scale = power_of_two_scale(V) if self.rescale else 1.0
         self.mesh = trimesh.Trimesh(vertices=V * self.scale, faces=F, process=False, validate=False)
         if self.ray_backend == "embree":
             self.ray = ray_pyembree.RayMeshIntersector(self.mesh)
