@@ -86,10 +86,13 @@ def verify(name: str, fam, stats: dict, check: dict) -> None:
 
 
 # Seconds per million triangles to make a mesh of a family, for the expected time said before a
-# long one starts (measured on this project's 2-core machine while other builds shared it: the
-# 1M closed bunny took 72 s, 40 of them the statistics and the trimesh check; the 500k scan-like
-# 26 s; the streamed 128M scan about 2 minutes). Others: DEFAULT_SECONDS_PER_MTRI.
+# long one starts (measured on this project's 2-core machine). Up to meshops.TRIMESH_CHECK_MAX_FACES
+# trimesh's checks dominate (the 1M closed bunny took 72 s, 40 of them the statistics and the
+# check; the 500k scan-like 26 s); above it the numpy checks alone run (alone on the machine: the
+# 32M closed bunny in 34 s, the 32M scan-like in 48 s; the streamed 128M scan about 2 minutes).
+# Others: DEFAULT_SECONDS_PER_MTRI.
 SECONDS_PER_MTRI = {"real_closed": 70.0, "scan_like": 50.0, "scan_like_streamed": 1.0}
+SECONDS_PER_MTRI_UNCHECKED = {"real_closed": 1.1, "scan_like": 1.5, "scan_like_streamed": 1.0}
 DEFAULT_SECONDS_PER_MTRI = 50.0
 
 
@@ -99,7 +102,13 @@ def expected_seconds(family: str, params: dict) -> float | None:
     triangles = params.get("triangles")
     if not triangles:
         return None
-    return SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI) * triangles / 1e6
+    return seconds_per_mtri(family, triangles) * triangles / 1e6
+
+
+def seconds_per_mtri(family: str, triangles: int) -> float:
+    """What a million triangles of `family` cost at this size (trimesh's checks run below a size)."""
+    per = SECONDS_PER_MTRI_UNCHECKED if triangles > meshops.TRIMESH_CHECK_MAX_FACES else SECONDS_PER_MTRI
+    return per.get(family, DEFAULT_SECONDS_PER_MTRI)
 
 
 def make_mesh(ctx: Context, out_dir: str, name: str, family: str, params: dict) -> dict:
@@ -240,8 +249,8 @@ def _make_one(ctx, out_dir: str, name: str, family: str, params: dict) -> dict:
     t0 = time.monotonic()
     expected = expected_seconds(family, full)
     if expected and expected >= 30:
-        log(f"{name}: making {full['triangles']:,} triangles, expected ~{expected / 60:.0f} min "
-            f"(at {SECONDS_PER_MTRI.get(family, DEFAULT_SECONDS_PER_MTRI):.0f} s per million triangles)")
+        log(f"{name}: making {full['triangles']:,} triangles, expected ~{expected:.0f} s "
+            f"(at {seconds_per_mtri(family, full['triangles']):.1f} s per million triangles)")
     entry = make_mesh(ctx, out_dir, name, family, params)
     log(f"{name}: done in {time.monotonic() - t0:.1f}s ({entry['triangles']:,} triangles, "
         f"closed={entry['closed']})")
