@@ -45,7 +45,8 @@ void add_suite_options(CLI::App* cmd, SuiteOpts& o) {
   cmd->add_flag("--list", o.list, "Print the expanded job ids and exit, running nothing");
   cmd->add_flag("--json", o.json,
                 "With --list: every job as JSON (id, mesh, query set, query, method and its canonical key, threads, "
-                "repeat): what tools read instead of the suite file");
+                "repeat): what tools read instead of the suite file. With --estimate: each job's expected seconds "
+                "and the part of them that builds its structure");
   cmd->add_flag("--estimate", o.estimate,
                 "Print how long the suite is expected to take here (with --resume: what is left), and exit");
   cmd->add_option("--timeout", o.timeout_s, "Per-job time limit in seconds (overrides the suite)");
@@ -102,7 +103,7 @@ void run_suite_command(const SuiteOpts& o) {
       for (auto& j : jobs) std::cout << j.id << "\n";
     return;
   }
-  if (o.json) throw InputError("--json goes with --list");
+  if (o.json && !o.estimate) throw InputError("--json goes with --list or --estimate");
   if (o.out.empty()) throw InputError("--out is required (a result folder, results/NAME)");
   SuiteRunOptions run;
   run.out = o.out;
@@ -110,8 +111,9 @@ void run_suite_command(const SuiteOpts& o) {
   run.resume = o.resume;
   if (o.estimate) {
     // The local executor shares builds, Dask's does not (dask_job_executor.hpp says why).
-    std::cerr << "suite " << cfg.name << ": " << estimate_suite(cfg, jobs, run, o.executor == "local").describe()
-              << "\n";
+    const SuitePrice price = estimate_suite(cfg, jobs, run, o.executor == "local");
+    std::cerr << "suite " << cfg.name << ": " << price.describe() << "\n";
+    if (o.json) std::cout << price_json(price, jobs).dump(1) << "\n";
     return;
   }
   std::unique_ptr<JobExecutor> executor;

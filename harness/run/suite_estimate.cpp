@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "build_info.hpp"
+#include "harness/run/calibration.hpp"
 #include "harness/run/job_executor.hpp"
 #include "harness/util/json_path.hpp"
 #include "harness/util/progress.hpp"
@@ -185,6 +186,8 @@ bool observe(const json& r, CostObservation* o) {
   o->loaded_mesh = number_or(r, {"build", "position"}, 1) <= 1;
   o->build_seconds = number_or(r, {"build", "seconds"}, 0);
   o->rest_seconds = std::max(0.0, elapsed - (o->loaded_mesh ? o->build_seconds : 0.0) - passes * n / qps);
+  const bool same_kernel = text_or(r, {"calibration", "kernel"}) == kCalibrationKernel;
+  o->kernel_seconds = same_kernel ? number_or(r, {"calibration", "median_seconds"}, 0) : 0;
   return true;
 }
 
@@ -203,7 +206,7 @@ std::vector<std::string> SuiteEstimator::default_folders(const std::string& out)
   return folders;
 }
 
-SuiteEstimator::SuiteEstimator(const std::vector<std::string>& folders) {
+SuiteEstimator::SuiteEstimator(const std::vector<std::string>& folders, double kernel_seconds_here) {
   std::error_code ec;
   for (const std::string& folder : folders) {
     const fs::path runs = fs::is_directory(fs::path(folder) / "runs", ec) ? fs::path(folder) / "runs" : fs::path(folder);
@@ -214,7 +217,8 @@ SuiteEstimator::SuiteEstimator(const std::vector<std::string>& folders) {
       if (read_result_file(e.path().string(), &r) && observe(r, &o)) obs_.push_back(o);
     }
   }
-  fit_rest();
+  fit_rest();  // the rest (a child's start, loading) is mostly not the processor's: not scaled
+  scale_to_machine(kernel_seconds_here);
   std::vector<double> builds, queries;
   for (const CostObservation& o : obs_) {
     builds.push_back(o.build_seconds / (o.triangles * log2_of(o.triangles)));
@@ -222,6 +226,20 @@ SuiteEstimator::SuiteEstimator(const std::vector<std::string>& folders) {
   }
   median_build_per_triangle_ = builds.empty() ? kBuildSecondsPerTriangleLog : median_of(builds);
   median_query_ = queries.empty() ? kQuerySeconds : median_of(queries);
+}
+
+/// Each observation's build and query costs times (kernel here / kernel then), held within
+/// [1/20, 20]: the calibration kernel is a query loop's pointer chase and arithmetic, so it moves
+/// as the builds and queries do when the machine, or its load, changes.
+void SuiteEstimator::scale_to_machine(double kernel_seconds_here) {
+  if (kernel_seconds_here <= 0) return;
+  for (CostObservation& o : obs_) {
+    if (o.kernel_seconds <= 0) continue;
+    const double f = std::clamp(kernel_seconds_here / o.kernel_seconds, 0.05, 20.0);
+    o.build_seconds *= f;
+    o.query_seconds *= f;
+    rescaled_ += std::abs(f - 1) > 0.1 ? 1 : 0;
+  }
 }
 
 /// rest = fixed + per triangle x T, least squares over the jobs that loaded their mesh; the
@@ -313,7 +331,9 @@ SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPl
                                  const std::string& data_dir) const {
   SuitePrice p;
   p.observations = obs_.size();
+  p.rescaled = rescaled_;
   p.job_seconds.assign(jobs.size(), 0.0);
+  p.build_seconds.assign(jobs.size(), 0.0);
   std::map<std::string, double> tris;
   auto triangles = [&](const JobPlan& j) {
     auto it = tris.find(j.mesh.path);
@@ -334,7 +354,8 @@ SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPl
       bool build_known = true, query_known = true;
       const bool builds = first || !shared_builds;
       double s = rest_fixed_ + double(cfg.repeat + 2) * double(j.queries.n) * query_seconds(j, t, &query_known);
-      if (builds) s += rest_per_triangle_ * t + build_seconds(j, t, &build_known);
+      if (builds) p.build_seconds[i] = build_seconds(j, t, &build_known);
+      if (builds) s += rest_per_triangle_ * t + p.build_seconds[i];
       p.builds += builds ? 1 : 0;
       p.guessed += build_known && query_known ? 0 : 1;
       p.job_seconds[i] = s;
@@ -379,10 +400,28 @@ std::string SuitePrice::describe() const {
   o << jobs << " job(s) to run, " << builds << " build(s): expected ~" << format_seconds(total()) << " (jobs "
     << format_seconds(jobs_s) << ", query sets and oracles " << format_seconds(data_seconds) << "; priced from "
     << observations << " result(s) on disk";
+  if (rescaled) o << ", " << rescaled << " of them scaled to this machine's speed by the calibration kernel";
   if (guessed) o << ", " << guessed << " job(s) of methods never run here priced at the median rates";
   if (unknown_meshes) o << ", " << unknown_meshes << " mesh(es) of unknown size";
   o << ")";
   return o.str();
+}
+
+json price_json(const SuitePrice& price, const std::vector<JobPlan>& jobs) {
+  json listed = json::array();
+  for (std::size_t i = 0; i < jobs.size() && i < price.job_seconds.size(); ++i) {
+    if (price.job_seconds[i] <= 0) continue;
+    listed.push_back({{"id", jobs[i].id},
+                      {"triangles", mesh_triangles(jobs[i].mesh.path)},
+                      {"seconds", price.job_seconds[i]},
+                      {"build_seconds", price.build_seconds[i]}});
+  }
+  return {{"seconds", price.total()},
+          {"data_seconds", price.data_seconds},
+          {"jobs", price.jobs},
+          {"builds", price.builds},
+          {"observations", price.observations},
+          {"priced", listed}};
 }
 
 double time_left(double expected_left, double expected_done, double actual_done) {

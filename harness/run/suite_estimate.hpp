@@ -14,6 +14,10 @@
 ///    (log T);
 ///  - the rest: a child's start, the calibration and the accuracy (a fixed part) and, once per
 ///    structure, loading the mesh (per triangle): fitted over every observation.
+/// Each observation's build and queries are first brought to this machine as it is now: scaled
+/// by the calibration kernel (calibration.hpp) timed here against the kernel its result recorded,
+/// so results made on a faster machine, or on this one while it was busy, price what they would
+/// cost here.
 /// A method without any observation is priced at the median rates of the methods that have.
 /// Query sets and oracles not in the cache yet come on top: mesh loading, and the oracle's cost
 /// per triangle and per query.
@@ -43,6 +47,7 @@ struct CostObservation {
   double query_seconds = 0;      ///< per query, one thread (1 / median throughput x threads)
   double rest_seconds = 0;       ///< elapsed - build - passes: start, loading, calibration, accuracy
   bool loaded_mesh = true;       ///< the job's child loaded the mesh (first of its group, or alone)
+  double kernel_seconds = 0;     ///< the calibration kernel's median beside it (0: none, or another kernel)
 };
 
 /// Reads a result as an observation; false for one that did not run ok or has no elapsed time.
@@ -55,21 +60,29 @@ double mesh_triangles(const std::string& path);
 /// The expected time of a suite's jobs.
 struct SuitePrice {
   std::vector<double> job_seconds;  ///< by job (0 for a job that will not run)
+  std::vector<double> build_seconds;  ///< by job, the part of job_seconds that builds its structure
   double data_seconds = 0;          ///< query sets and oracles still to make
   std::size_t jobs = 0;             ///< jobs priced (to run)
   std::size_t builds = 0;           ///< structures built for them
   std::size_t observations = 0;     ///< results it learned from
   std::size_t unknown_meshes = 0;   ///< meshes of unknown size (priced as 1 triangle)
   std::size_t guessed = 0;          ///< jobs of a method never observed
+  std::size_t rescaled = 0;         ///< results whose speed was scaled to this machine by over 10 %
   double total() const;
   /// "N job(s), B build(s): expected ~T (jobs .., query sets and oracles ..; from O results)".
   std::string describe() const;
 };
 
+/// `suite --estimate --json`: the total and its parts, and each job to run with its expected
+/// seconds and the build's part of them (where the time of a suite goes, before it runs).
+nlohmann::json price_json(const SuitePrice& price, const std::vector<JobPlan>& jobs);
+
 class SuiteEstimator {
  public:
-  /// Learns from the results of `folders` (each a suite's result folder, or a folder of runs).
-  explicit SuiteEstimator(const std::vector<std::string>& folders);
+  /// Learns from the results of `folders` (each a suite's result folder, or a folder of runs),
+  /// their builds and queries scaled to a machine whose calibration kernel takes
+  /// `kernel_seconds_here` (0: taken as measured).
+  explicit SuiteEstimator(const std::vector<std::string>& folders, double kernel_seconds_here = 0);
   /// The default folders: OUT (a previous run), every results/*/ of this checkout, the
   /// committed baseline and the report tests' fixture.
   static std::vector<std::string> default_folders(const std::string& out);
@@ -81,9 +94,12 @@ class SuiteEstimator {
                    const std::vector<BuildGroup>& groups, bool shared_builds, const std::string& data_dir) const;
 
   std::size_t observations() const { return obs_.size(); }
+  /// The observations whose speed the calibration kernel moved by more than 10 %.
+  std::size_t rescaled() const { return rescaled_; }
 
  private:
   void fit_rest();
+  void scale_to_machine(double kernel_seconds_here);
   double build_seconds(const JobPlan& job, double triangles, bool* known) const;
   double data_seconds(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const std::vector<bool>& to_run,
                       const std::string& data_dir, const std::function<double(const JobPlan&)>& triangles) const;
@@ -91,6 +107,7 @@ class SuiteEstimator {
   std::vector<CostObservation> obs_;
   double rest_fixed_ = 0.5, rest_per_triangle_ = 0;  // fitted in the constructor
   double median_build_per_triangle_ = 0, median_query_ = 0;
+  std::size_t rescaled_ = 0;
 };
 
 /// The time left: `expected_left` (the jobs not finished, as priced) scaled by how the finished

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "harness/run/build_groups.hpp"
+#include "harness/run/calibration.hpp"
 #include "harness/run/interrupt.hpp"
 #include "harness/run/job_status.hpp"
 #include "harness/run/suite_data.hpp"
@@ -77,7 +78,9 @@ SuitePrice estimate_suite(const SuiteConfig& cfg, const std::vector<JobPlan>& jo
   std::vector<bool> to_run(jobs.size(), true);
   if (options.resume)
     for (std::size_t i = 0; i < jobs.size(); ++i) to_run[i] = !job_done(options, jobs[i]);
-  const SuiteEstimator estimator(SuiteEstimator::default_folders(options.out));
+  // The kernel timed here now, as each result timed it beside its job.
+  const double kernel_here = measure_calibration(3).value("median_seconds", 0.0);
+  const SuiteEstimator estimator(SuiteEstimator::default_folders(options.out), kernel_here);
   return estimator.price(cfg, jobs, to_run, group_by_structure(jobs), shared_builds, data_folder(options).string());
 }
 

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "harness/run/calibration.hpp"
 #include "harness/run/run_job.hpp"
 #include "harness/run/suite_estimate.hpp"
 #include "support/test_support.hpp"
@@ -32,8 +33,9 @@ SuitePrice price_of(const SuiteEstimator& e, const SuiteConfig& cfg, bool shared
   return e.price(cfg, cfg.jobs, std::vector<bool>(cfg.jobs.size(), true), group_by_structure(cfg.jobs), shared, data);
 }
 
-/// A finished ebp_octree job on `triangles` triangles: 1 s of build, 1e5 queries/s.
-void write_observation(const std::string& runs, double triangles) {
+/// A finished ebp_octree job on `triangles` triangles: 1 s of build, 1e5 queries/s, beside a
+/// calibration kernel of `kernel_seconds` (none when 0).
+void write_observation(const std::string& runs, double triangles, double kernel_seconds = 0) {
   JobSpec spec;
   nlohmann::json r = make_result(spec, status::ok, "");
   r["job"]["method"] = "ebp_octree";
@@ -45,6 +47,7 @@ void write_observation(const std::string& runs, double triangles) {
   r["queries"] = {{"n", 1000}, {"throughput_qps", {{"median", 1e5}}}};
   r["build"] = {{"seconds", 1.0}};
   r["elapsed_seconds"] = 2.0;
+  if (kernel_seconds > 0) r["calibration"] = {{"kernel", kCalibrationKernel}, {"median_seconds", kernel_seconds}};
   std::filesystem::create_directories(runs);
   write_json_atomic(runs + "/obs.json", r);
 }
@@ -76,7 +79,9 @@ TEST(SuiteEstimate, ATenTimesBiggerMeshOrQuerySetIsPricedHigher) {
     const SuitePrice more = price_of(e, suite_on(d, "small", 10000), true, d.file("data"));
     EXPECT_GT(big.total(), small.total() + 0.5);
     // From an observed build (1 s at 50k triangles), ten times the triangles is over ten times the build.
-    if (observed) EXPECT_GT(big.total(), 3 * small.total());
+    if (observed) {
+      EXPECT_GT(big.total(), 3 * small.total());
+    }
     EXPECT_GT(more.total(), small.total());
     EXPECT_EQ(small.jobs, 4u);
     // The observation is of inside queries: the distance jobs are priced at the median rates.
@@ -96,6 +101,23 @@ TEST(SuiteEstimate, AStructureSharedByItsJobsIsBuiltOnce) {
   EXPECT_EQ(alone.builds, 4u);
   // Three builds of 1 s (and three mesh loads) fewer.
   EXPECT_GT(alone.total() - shared.total(), 3.0);
+}
+
+TEST(SuiteEstimate, AResultMadeOnASlowerMachineIsScaledByTheCalibrationKernel) {
+  TmpDir d;
+  write_ply_header(d.file("big.ply"), 5000000);
+  write_observation(d.file("seen/runs"), 5000000, 0.1);
+  const SuiteConfig cfg = suite_on(d, "big", 100000);
+  const SuitePrice as_measured = price_of(SuiteEstimator({d.file("seen")}), cfg, true, d.file("data"));
+  const SuitePrice same = price_of(SuiteEstimator({d.file("seen")}, 0.1), cfg, true, d.file("data"));
+  const SuitePrice faster = price_of(SuiteEstimator({d.file("seen")}, 0.02), cfg, true, d.file("data"));
+  EXPECT_DOUBLE_EQ(same.total(), as_measured.total());
+  EXPECT_EQ(same.rescaled, 0u);
+  EXPECT_EQ(faster.rescaled, 1u);
+  // Inside jobs: one build of 1 s and 5 passes of 1e5 queries at 1e5/s, each five times faster
+  // here; the distance jobs are priced at the (scaled) median rates too.
+  EXPECT_LT(faster.total(), 0.4 * as_measured.total());
+  EXPECT_GT(faster.total(), 0.1 * as_measured.total());
 }
 
 TEST(SuiteEstimate, TheTimeLeftFollowsHowTheFinishedJobsCompared) {
