@@ -354,8 +354,10 @@ SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPl
       bool build_known = true, query_known = true;
       const bool builds = first || !shared_builds;
       double s = rest_fixed_ + double(cfg.repeat + 2) * double(j.queries.n) * query_seconds(j, t, &query_known);
-      if (builds) p.build_seconds[i] = build_seconds(j, t, &build_known);
-      if (builds) s += rest_per_triangle_ * t + p.build_seconds[i];
+      if (builds) {
+        p.build_seconds[i] = build_seconds(j, t, &build_known);
+        s += rest_per_triangle_ * t + p.build_seconds[i];
+      }
       p.builds += builds ? 1 : 0;
       p.guessed += build_known && query_known ? 0 : 1;
       p.job_seconds[i] = s;

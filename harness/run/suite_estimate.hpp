@@ -94,8 +94,6 @@ class SuiteEstimator {
                    const std::vector<BuildGroup>& groups, bool shared_builds, const std::string& data_dir) const;
 
   std::size_t observations() const { return obs_.size(); }
-  /// The observations whose speed the calibration kernel moved by more than 10 %.
-  std::size_t rescaled() const { return rescaled_; }
 
  private:
   void fit_rest();
