@@ -340,11 +340,16 @@ void CertifiedPath::step_to(const Vec3d& q) {
   prev_ = q;
 }
 
-bool CertifiedPath::radii(double* r_max, double* r_floor) const {
-  if (nsteps_ == 0) return false;
+double CertifiedPath::mean_step() const {
+  if (nsteps_ == 0) return 0;
   double s = 0;
   for (unsigned i = 0; i < nsteps_; ++i) s += norm(moves_[i]);
-  const double step = s / double(nsteps_);
+  return s / double(nsteps_);
+}
+
+bool CertifiedPath::radii(double* r_max, double* r_floor) const {
+  if (nsteps_ == 0) return false;
+  const double step = mean_step();
   if (!std::isfinite(step)) return false;
   *r_max = cert.rule().step_factor * step;
   // Where the K-nearest term set the last radius (small triangles), start the collection from

@@ -78,6 +78,20 @@ inline bool cell_holds_ball(const Vec3d& lo, double size, const Vec3d& p, double
          lo.z + size - p.z > r;
 }
 
+/// Whether a step of length `step` (the largest coordinate difference) from a point at distance
+/// `prev_d` from the surface is a jump on a coherent distance path: longer than the leaf cell
+/// `leaf_cell` and than the distance itself. The previous closest triangle bounds the next
+/// distance by the true one plus at most twice the step (triangle inequality): a tight start
+/// over a short step, a loose one over a jump (random points, a path that starts again
+/// elsewhere), where it would also cost the scan of its leaf and stop the located start (which
+/// runs only with no bound yet). Answers do not depend on the choice.
+inline bool is_jump(double step, double prev_d, double leaf_cell) { return step > std::max(leaf_cell, prev_d); }
+
+/// The step from prev to p, as is_jump measures it.
+inline double step_length(const Vec3d& p, const Vec3d& prev) {
+  return std::max({std::fabs(p.x - prev.x), std::fabs(p.y - prev.y), std::fabs(p.z - prev.z)});
+}
+
 /// Where and how Query::distance_bound starts.
 struct DistanceStart {
   const std::uint32_t* key_of = nullptr;  ///< LeafTri::tri -> key (increasing); null: key = tri
@@ -161,6 +175,10 @@ class Query {
   std::uint32_t last_tri_ = UINT32_MAX;  // LeafTri index of the previous closest triangle
   std::uint32_t last_leaf_ = UINT32_MAX;  // and the leaf where it was found
   std::uint32_t last_leaf_node_ = UINT32_MAX;  // and that leaf's node
+  Vec3d last_p_;                             // the point it was closest to
+  double last_d_ = 0;                        // at this distance
+  /// Whether the search at p seeds from last_tri_: the step from last_p_ is no jump (is_jump).
+  bool seed_pays_at(const Vec3d& p) const;
   // distance: the last narrowed start's walk (query_distance.cpp): from the subtree root `root`,
   // the node and cell corner at each level below it, so that the next search of a coherent path
   // resumes from the deepest of those cells that holds its ball instead of walking down from the

@@ -613,13 +613,19 @@ DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
 }
 
+bool Query::seed_pays_at(const Vec3d& p) const {
+  return last_tri_ != UINT32_MAX && !is_jump(step_length(p, last_p_), last_d_, t_.cell_size(t_.leaf_level));
+}
+
 DistanceAnswer Query::searched_distance(const Vec3d& p) {
   DistanceBest b;
   DistanceStart s;
   if (coherent_) {
-    s.seed_tri = last_tri_;
-    s.seed_leaf = last_leaf_;
-    s.seed_node = last_leaf_node_;
+    if (seed_pays_at(p)) {
+      s.seed_tri = last_tri_;
+      s.seed_leaf = last_leaf_;
+      s.seed_node = last_leaf_node_;
+    }
     s.near = true;
   }
   distance_bound(p, b, s);
@@ -634,6 +640,8 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
     last_tri_ = b.k;
     last_leaf_ = b.leaf;
     last_leaf_node_ = b.node;
+    last_p_ = p;
+    last_d_ = r.distance;
   }
   return r;
 }
@@ -643,15 +651,21 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
 // The first query of a path has no step yet: a plain search.
 DistanceAnswer Query::certified_distance(const Vec3d& p) {
   TriangleSite site;
+  // (a renewal's ball follows the path's mean step: one jump in its window is enough to skip it)
+  auto jumped = [&] {
+    return last_tri_ != UINT32_MAX && std::max(step_length(p, last_p_), path_->mean_step()) > t_.cell_size(t_.leaf_level);
+  };
   const DistanceAnswer r = certified_query(
-      *path_, p, t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
+      *path_, p, jumped, t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         DistanceBest b;
         b.collect = &cert;
         DistanceStart s;
-        s.seed_tri = last_tri_;
-        s.seed_leaf = last_leaf_;
-        s.seed_node = last_leaf_node_;
+        if (seed_pays_at(centre)) {
+          s.seed_tri = last_tri_;
+          s.seed_leaf = last_leaf_;
+          s.seed_node = last_leaf_node_;
+        }
         distance_bound(centre, b, s);
       },
       [&] { return searched_distance(p); });
@@ -659,6 +673,8 @@ DistanceAnswer Query::certified_distance(const Vec3d& p) {
     last_tri_ = site.k;
     last_leaf_ = site.leaf;
     last_leaf_node_ = site.node;
+    last_p_ = p;
+    last_d_ = r.distance;
   }
   return r;
 }

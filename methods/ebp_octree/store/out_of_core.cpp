@@ -173,7 +173,7 @@ void OutOfCore::page_distance(std::uint32_t id, PageCache::Entry& e, const Vec3d
   s.key_of = e.page->global_tri.data();
   s.node = e.page->chain == 0 ? 0u : e.page->chain - 2;  // chain - 1 is the white dummy
   bst.b.collect_page = id;
-  if (coherent_ && last_page_ == id && last_k_ < t.tris.size()) {
+  if (seeded_ && last_page_ == id && last_k_ < t.tris.size()) {
     s.seed_tri = last_k_;
     s.seed_leaf = last_leaf_;
     s.seed_node = last_node_;
@@ -265,7 +265,8 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
     }
     page_distance(id, cache_.get(id), p, bst);
   };
-  if (coherent_ && last_page_ != UINT32_MAX) {
+  seeded_ = coherent_ && last_page_ != UINT32_MAX && seed_pays_at(p);
+  if (seeded_) {
     visit_page(last_page_);
     if (bst.b.near_certified) return;  // the previous page's near set holds the ball: no other page can win
   }
@@ -319,6 +320,12 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
   }
 }
 
+double OutOfCore::leaf_cell() const { return root_size_ / double(std::uint64_t(1) << leaf_level_); }
+
+bool OutOfCore::seed_pays_at(const Vec3d& p) const {
+  return !is_jump(step_length(p, last_p_), last_d_, leaf_cell());
+}
+
 DistanceAnswer OutOfCore::unsigned_distance_frame(const Vec3d& p) {
   return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
 }
@@ -337,6 +344,8 @@ DistanceAnswer OutOfCore::searched_distance(const Vec3d& p) {
     last_k_ = bst.k;
     last_leaf_ = bst.leaf;
     last_node_ = bst.node;
+    last_p_ = p;
+    last_d_ = ans.distance;
   }
   return ans;
 }
@@ -348,8 +357,11 @@ void OutOfCore::set_adaptive_certificate(bool on) { path_->set_adaptive(on); }
 // with, and each page offers its triangles with its id).
 DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
   TriangleSite site;
+  auto jumped = [&] {
+    return last_page_ != UINT32_MAX && std::max(step_length(p, last_p_), path_->mean_step()) > leaf_cell();
+  };
   const DistanceAnswer r = certified_query(
-      *path_, p, root_lo_, root_size_, top_counters_, &site,
+      *path_, p, jumped, root_lo_, root_size_, top_counters_, &site,
       [&] { return work_of(top_counters_) + page_work_; },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         Best bst;
@@ -362,6 +374,8 @@ DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
     last_k_ = site.k;
     last_leaf_ = site.leaf;
     last_node_ = site.node;
+    last_p_ = p;
+    last_d_ = r.distance;
   }
   return r;
 }

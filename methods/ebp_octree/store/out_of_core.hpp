@@ -62,6 +62,11 @@ class OutOfCore {
   std::uint64_t query_id_ = 0;
   // coherent: page, LeafTri index and leaf (in that page) of the previous closest triangle
   std::uint32_t last_page_ = UINT32_MAX, last_k_ = UINT32_MAX, last_leaf_ = UINT32_MAX, last_node_ = UINT32_MAX;
+  Vec3d last_p_;        // the point it was closest to, at distance last_d_
+  double last_d_ = 0;
+  bool seeded_ = false;  // the current search starts from it (is_jump, query.hpp)
+  bool seed_pays_at(const Vec3d& p) const;
+  double leaf_cell() const;
 
   bool closed_;
   bool certificate_ = true, chained_sign_ = true;

@@ -166,6 +166,38 @@ TEST(EbpCertificate, AutoPolicyUsesCertificatesWhereTheyPay) {
   }
 }
 
+// Uniform random points are jumps, not a path: a coherent query (default policy) neither seeds
+// its search from the previous answer nor renews a certificate there, so it does the work of a
+// search without coherence (a trial certificate over a jump collects a ball of the jump's size:
+// it cost over 10x a plain search's planes a query on the 1M bunny), in memory and out of core,
+// with the same answers.
+TEST(EbpCertificate, RandomPointsCostWhatPlainSearchesDo) {
+  const Mesh m = bvhbench::load_mesh(shared_mesh("cow.obj"));
+  BuildParams bp;
+  bp.threads = 1;
+  const Octree t = build_octree(m.vertices, m.triangles, bp);
+  nlohmann::json meta;
+  const auto points = bvhbench::generate_queries(m, "random", 2000, 1, {}, &meta);
+  bvhbench::test::TmpDir d("ebp_jump_test");
+  StoreWriteOptions o;
+  o.page_target = 4096;
+  write_store_atomic(t, d.file("c.ebp"), o);
+  Query coherent(t, true), plain(t, false);
+  OutOfCore ooc_coherent(d.file("c.ebp"), 64 << 20, true, false), ooc_plain(d.file("c.ebp"), 64 << 20, false, false);
+  for (const Vec3d& p : points) {
+    const DistanceAnswer a = coherent.unsigned_distance(p), b = plain.unsigned_distance(p);
+    ASSERT_EQ(differs(a, b), "");
+    ASSERT_EQ(differs(ooc_coherent.unsigned_distance(p), b), "");
+    ASSERT_EQ(differs(ooc_plain.unsigned_distance(p), b), "");
+  }
+  EXPECT_EQ(coherent.counters.certificate_renewals, 0u);
+  EXPECT_EQ(ooc_coherent.counters().certificate_renewals, 0u);
+  // (the near set's gathering attempts, which fail at once on a jump's box, count a few planes)
+  EXPECT_LT(double(coherent.counters.planes_tested), 1.05 * double(plain.counters.planes_tested));
+  EXPECT_LT(double(coherent.counters.triangles_tested), 1.05 * double(plain.counters.triangles_tested));
+  EXPECT_LT(double(ooc_coherent.counters().triangles_tested), 1.05 * double(ooc_plain.counters().triangles_tested));
+}
+
 // Grazing paths in small steps: through vertices exactly, along edges, in a face's plane, on
 // the octree's leaf-cell boundary planes, against brute force and the plain branch and bound.
 TEST(EbpCertificate, GrazingPathsAreExact) {
