@@ -154,7 +154,7 @@ class Query {
   // boxes meet the float box [lo, hi] around it, from every leaf whose cell meets it, each once,
   // with their boxes (near_set.hpp). A cache of derived data: answers do not depend on it.
   bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
-  bool gather_near(const Vec3d& s0, const Vec3d& s1, std::uint32_t leaf_node);
+  bool gather_near(const Vec3d& s0, const Vec3d& s1, const Vec3d& step, std::uint32_t leaf_node);
   // The near sets are allocated on first use: an out-of-core page has a Query of its own, and
   // most pages never need one (2.3 KB each).
   static NearSet& allocated(std::unique_ptr<NearSet>& s) {
