@@ -212,6 +212,23 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
 // of a leaf cell on an axis) out of the near set's box, the near set cannot be gathered (see
 // gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
 // on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
+namespace {
+// A step longer than kNearInsideJump of a leaf cell on some axis is a jump, not a path: the
+// reference path is cheaper than gathering the triangles of up to 8 leaves. The step's near set
+// reaches ahead of p along the step, by kNearInsideAhead steps, with a margin of the larger of
+// kNearInsideMargin leaf cells and kNearInsideSide steps, so that a set serves the next steps of
+// a path instead of the one it was gathered for. Measured on the haptic path (20,000 points,
+// seed 1), callgrind instructions per query on the 1M / 4M bunny and wall clock on the 32M one
+// (the last three of 5 passes; the plain search 5.5-6.4 M q/s): without the reach (the step's
+// box and 1/32 cell, jumps from 1/4 cell: 64 % of the 4M path's queries gathered a set)
+// 1,166 / 1,504 (plain 1,368) / 4.4-4.8 M q/s; the reach with jumps from 1/4 cell 757 / 832 /
+// 2.2-2.7 M; from 1/8 757 / 832 / 2.2-2.7 M; from 1/16 757 / 851 / 6.0-6.9 M. Ahead 4 / 8 / 12
+// / 16 steps (1/4 cell, 1M): 810 / 757 / 748 / 755; 4M: - / 832 / 908 / -.
+constexpr double kNearInsideJump = 1.0 / 16;
+constexpr double kNearInsideMargin = 1.0 / 32;
+constexpr double kNearInsideSide = 1.0;
+constexpr double kNearInsideAhead = 8.0;
+}  // namespace
 bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
   const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
@@ -225,9 +242,7 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
     if (holds(dnear_, f0, f1)) {
       set = dnear_.get();
     } else {
-      // A step longer than a quarter of a leaf cell on some axis is a jump, not a path: the
-      // reference path is cheaper than gathering the triangles of up to 8 leaves.
-      const double jump = 0.25 * t_.cell_size(t_.leaf_level);
+      const double jump = kNearInsideJump * t_.cell_size(t_.leaf_level);
       if (s1.x - s0.x > jump || s1.y - s0.y > jump || s1.z - s0.z > jump || !gather_near(s0, s1, p - q, leaf_node))
         return false;
       set = near_.get();
@@ -266,19 +281,6 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   prev_w_ = w;
   return true;
 }
-
-namespace {
-// The step's near set reaches ahead of p along the step, by kNearInsideAhead steps, with a margin
-// of the larger of kNearInsideMargin leaf cells and kNearInsideSide steps, so that a set serves
-// the next steps of a path instead of the one it was gathered for. Callgrind, instructions per
-// query on the haptic path (20,000 points, seed 1), 1M / 4M bunny: without the reach (the step
-// box and 1/32 cell: 64 % of the 4M path's queries gathered a set) 1,166 / 1,504, above the
-// plain search's 1,368 at 4M; ahead 4 steps 810 / -; 8 steps 757 / 833; 12 steps 748 / 908;
-// 16 steps 755 / -; a side of 2 steps (ahead 4) 833 / -.
-constexpr double kNearInsideMargin = 1.0 / 32;
-constexpr double kNearInsideSide = 1.0;
-constexpr double kNearInsideAhead = 8.0;
-}  // namespace
 
 // The near set around the box [s0, s1] of the step `step` (step_from_prev): its box is [s0, s1]
 // and the point kNearInsideAhead steps ahead of p, grown by the margin below (or the step's box
