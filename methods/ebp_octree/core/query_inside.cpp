@@ -200,19 +200,7 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
   return true;
 }
 
-}  // namespace
 
-// Coherent inside on a closed mesh (the winding number is then a function of the point):
-// w(p) = w(prev) + (signed crossings of the segment prev -> p). The segment lies in its bounding
-// box S; the triangles that can cross it are those whose boxes meet S (box comparisons are of
-// exact values: float boxes against S rounded outwards to float, conservative), and they are all
-// in the near set (gather_near) when S lies in the set's box: the query scans that short list,
-// and gathers it anew around S when S has left it. Sides and crossings are exact predicates.
-// Returns false (the caller takes the reference path) when the step is a jump (over a quarter
-// of a leaf cell on an axis) out of the near set's box, the near set cannot be gathered (see
-// gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
-// on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
-namespace {
 // A step longer than kNearInsideJump of a leaf cell on some axis is a jump, not a path: the
 // reference path is cheaper than gathering the triangles of up to 8 leaves. The step's near set
 // reaches ahead of p along the step, by kNearInsideAhead steps, with a margin of the larger of
@@ -229,6 +217,17 @@ constexpr double kNearInsideMargin = 1.0 / 32;
 constexpr double kNearInsideSide = 1.0;
 constexpr double kNearInsideAhead = 8.0;
 }  // namespace
+
+// Coherent inside on a closed mesh (the winding number is then a function of the point):
+// w(p) = w(prev) + (signed crossings of the segment prev -> p). The segment lies in its bounding
+// box S; the triangles that can cross it are those whose boxes meet S (box comparisons are of
+// exact values: float boxes against S rounded outwards to float, conservative), and they are all
+// in the near set (gather_near) when S lies in the set's box: the query scans that short list,
+// and gathers it anew around S when S has left it. Sides and crossings are exact predicates.
+// Returns false (the caller takes the reference path) when the step is a jump (over
+// kNearInsideJump of a leaf cell on an axis) out of the near set's box, the near set cannot be
+// gathered (see gather_near), prev lies in a candidate's plane, or the segment is degenerate; p exactly
+// on a triangle gives *w = 1 (the solid is closed) and leaves prev as it was.
 bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
   const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
@@ -285,8 +284,8 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
 // The near set around the box [s0, s1] of the step `step` (step_from_prev): its box is [s0, s1]
 // and the point kNearInsideAhead steps ahead of p, grown by the margin below (or the step's box
 // alone, if the grown box fails below), rounded outwards to float. The box must lie in the
-// union of the closed leaf-grid cells [cell(lo), cell(hi)], at most 2 per axis (checked exactly against the exact cell boundaries of Octree::cell_box); a
-// triangle that meets a closed cell is listed in that cell's leaf (empty nodes have none), so
+// union of the closed leaf-grid cells [cell(lo), cell(hi)], at most 2 per axis (checked
+// exactly against the exact cell boundaries of Octree::cell_box); a triangle that meets a closed cell is listed in that cell's leaf (empty nodes have none), so
 // the triangles whose boxes meet the box are among those leaves' references: the leaves' blocks
 // are tested by their (derived) boxes, then the triangles of the blocks that meet it by their own
 // (box_pass), and an input triangle listed in two leaves is kept once. Fails (valid = false)
