@@ -600,7 +600,9 @@ ExtBuildReport build_store_external(TriangleSource& src, const std::string& path
   const FrameScan scan = scan_frame(src, arena, opt);
   const std::uint64_t nt = scan.acc.triangles;
   if (nt == 0) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
-  if (nt >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
+  if (nt > kMaxTriangles)  // the LeafTri index shares its word with the flags
+    throw std::invalid_argument("ebp_octree: " + std::to_string(nt) + " triangles, more than the " +
+                                std::to_string(kMaxTriangles) + " a tree can index");
   R.closed = scan.closed;
   const Frame F = compute_frame(scan.acc, opt.params);
   const BuildContext ctx(F, opt.params);

@@ -12,8 +12,10 @@
 #include "methods/ebp_octree/build/plane_fit.hpp"
 #include "methods/ebp_octree/build/polytope.hpp"
 #include "methods/ebp_octree/build/tri_box.hpp"
+#include "methods/ebp_octree/core/face_normal.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 #include "methods/ebp_octree/core/reference_points.hpp"
 
@@ -33,6 +35,7 @@ struct LeafGeometry {
   std::vector<Cand> cands;
   std::vector<Vec3d> geo;
   double radius = 0;
+  double normal_error = 0;  ///< the largest direction error of the block's face-normal codes
 };
 
 /// The LeafTri records out[0, n) of the leaf's triangles (in input order), with their float face
@@ -50,22 +53,26 @@ LeafGeometry fill_triangle_block(const Vec3d& lo, const Vec3d& hi, const Vec3d& 
     const Vec3d a{double(v[0]), double(v[1]), double(v[2])}, b{double(v[3]), double(v[4]), double(v[5])},
         c{double(v[6]), double(v[7]), double(v[8])};
     for (int q = 0; q < 3; ++q) { r.a[q] = v[q]; r.b[q] = v[3 + q]; r.c[q] = v[6 + q]; }
-    r.tri = t;
-    r.flags = 0;
-    r.pad = 0;
+    r.tri_flags = t;
     const bool degen = collinear_exact(a, b, c);
     const Vec3d nrm = cross(b - a, c - a);
     const double len = norm(nrm);
-    if (degen) r.flags |= kDegenerate;
+    if (degen) r.tri_flags |= kDegenerate;
+    double normal_err = 1;
     if (!degen && len >= 1e-6 * norm(b - a) * norm(c - a)) {
       const Vec3d nn = nrm / len;
-      const Vec3d nf = round_to_float(nn);
-      r.n[0] = float(nf.x); r.n[1] = float(nf.y); r.n[2] = float(nf.z);
-      r.d = float(dot(nf, a - cfd));
+      r.normal = encode_face_normal(nn, &normal_err);
+      float v[3];
+      decode_face_normal(r.normal, v);
+      r.d = float(double(v[0]) * (a.x - cfd.x) + double(v[1]) * (a.y - cfd.y) + double(v[2]) * (a.z - cfd.z));
       g.cands.push_back({nn, 0.5 * len, t});
-    } else {
-      r.n[0] = r.n[1] = r.n[2] = 0.f;
+    }
+    if (normal_err > kFaceNormalError) {  // no plane: every side test of this triangle goes exact
+      r.tri_flags |= kNoPlane;
+      r.normal = 0;
       r.d = 0.f;
+    } else {
+      g.normal_error = std::max(g.normal_error, normal_err);
     }
     g.radius = std::max({g.radius, norm(a - cfd), norm(b - cfd), norm(c - cfd)});
     clip_triangle_to_box(lo, hi, a, b, c, g.geo);
@@ -134,7 +141,7 @@ std::vector<Vec3d> distinct_vertices(const LeafTri* blk, std::uint32_t n) {
   struct Key { std::uint32_t x, y, z, used; };
   std::vector<Key> set(cap, Key{0, 0, 0, 0});
   for (std::uint32_t k = 0; k < n; ++k) {
-    if (blk[k].flags & kDegenerate) continue;
+    if (blk[k].flags() & kDegenerate) continue;
     for (const float* f : {blk[k].a, blk[k].b, blk[k].c}) {
       Key key{0, 0, 0, 1};
       std::memcpy(&key.x, &f[0], 4);
@@ -163,7 +170,7 @@ LeafConfig classify_leaf(const LeafTri* blk, std::uint32_t n) {
   const std::vector<Vec3d> verts = distinct_vertices(blk, n);
   bool convex = !verts.empty(), concave = !verts.empty();
   for (std::uint32_t k = 0; k < n && (convex || concave); ++k) {
-    if (blk[k].flags & kDegenerate) continue;
+    if (blk[k].flags() & kDegenerate) continue;
     const Vec3d a = to_d(blk[k].a), b = to_d(blk[k].b), c = to_d(blk[k].c);
     for (const Vec3d& v : verts) {
       const int o = orient3d(a, b, c, v);
@@ -192,7 +199,7 @@ void choose_reference(const Vec3d& lo, const Vec3d& hi, const Vec3d& cc, double 
     bool ok = true;
     int inner = 0, outer = 0;
     for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
-      if (blk[k].flags & kDegenerate) { sides[k] = 0; continue; }
+      if (blk[k].flags() & kDegenerate) { sides[k] = 0; continue; }
       const int o = orient3d(to_d(blk[k].a), to_d(blk[k].b), to_d(blk[k].c), r);
       if (o == 0) { ok = false; break; }
       sides[k] = o > 0;
@@ -212,7 +219,7 @@ void choose_reference(const Vec3d& lo, const Vec3d& hi, const Vec3d& cc, double 
   lf.ref_winding = 0;
   if (lf.ref_valid)
     for (std::uint32_t k = 0; k < lf.tri_count; ++k)
-      if (best_sides[k]) out[k].flags |= kRefPositive;
+      if (best_sides[k]) out[k].tri_flags |= kRefPositive;
 }
 
 /// The winding-number change from the reference point `ra` to the portal `q`, over the block
@@ -221,15 +228,15 @@ void choose_reference(const Vec3d& lo, const Vec3d& hi, const Vec3d& cc, double 
 /// non-degenerate plane, nonzero) and the portal's side filtered by the leaf's float planes
 /// (|s| > eps decides, as in the queries; otherwise orient3d): the same result, cheaper.
 bool half_edge(const Leaf& lf, const LeafTri* out, std::size_t n, const Vec3d& ra, const Vec3d& q, int* winding) {
-  const float qx = float(q.x - double(lf.centre[0])), qy = float(q.y - double(lf.centre[1])),
-              qz = float(q.z - double(lf.centre[2]));
+  const float ql[3] = {float(q.x - double(lf.centre[0])), float(q.y - double(lf.centre[1])),
+                       float(q.z - double(lf.centre[2]))};
   const float eps = lf.eps;
   int w = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const LeafTri& t = out[k];
-    if (t.flags & kDegenerate) continue;
-    const int sp = (t.flags & kRefPositive) ? 1 : -1;
-    const float s = t.n[0] * qx + t.n[1] * qy + t.n[2] * qz - t.d;
+    if (t.flags() & kDegenerate) continue;
+    const int sp = (t.flags() & kRefPositive) ? 1 : -1;
+    const float s = face_plane_value(t, ql);
     int sq;
     if (s > eps) sq = 1;
     else if (s < -eps) sq = -1;
@@ -280,7 +287,7 @@ void build_leaf(const BuildContext& ctx, Octcode code, std::size_t n, const std:
   // The LeafTri block out[0, n) is complete: put it in spatial order (leaf_blocks.hpp; the
   // distance query bounds groups of consecutive triangles). Both builds pass here.
   order_leaf_triangles(out, std::uint32_t(n));
-  lf->eps = round_up(2e-6 * g.radius);
+  lf->eps = round_up(leaf_plane_eps(g.radius, g.normal_error));
   bound_leaf(ctx, lo, hi, leaf_planes(ctx, lo, hi, g), tmp);
   nd->plane_count = std::uint16_t(tmp->planes.size());
   nd->config = classify_leaf(out, lf->tri_count);

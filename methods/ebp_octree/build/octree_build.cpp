@@ -71,7 +71,9 @@ using Triangles = std::vector<std::array<std::uint32_t, 3>>;
 
 void check_input(const std::vector<Vec3d>& vin, const Triangles& tin) {
   if (tin.empty()) throw std::invalid_argument("ebp_octree: the mesh has no triangle");
-  if (tin.size() >= (1ull << 31)) throw std::invalid_argument("ebp_octree: more than 2^31 triangles");
+  if (tin.size() > kMaxTriangles)  // the LeafTri index shares its word with the flags
+    throw std::invalid_argument("ebp_octree: " + std::to_string(tin.size()) + " triangles, more than the " +
+                                std::to_string(kMaxTriangles) + " a tree can index");
   for (const Vec3d& v : vin)
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
       throw std::invalid_argument("ebp_octree: non-finite vertex coordinate");

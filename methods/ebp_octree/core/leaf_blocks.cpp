@@ -79,7 +79,7 @@ void order_leaf_triangles(LeafTri* block, std::uint32_t n) {
   for (std::uint32_t k = 0; k < n; ++k) {
     const LeafTri& t = block[k];
     for (int a = 0; a < 3; ++a) c[k].c[a] = double(t.a[a]) + double(t.b[a]) + double(t.c[a]);
-    c[k].tri = t.tri;
+    c[k].tri = t.tri();
     c[k].k = k;
   }
   split(c.data(), n);

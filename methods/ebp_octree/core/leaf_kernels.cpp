@@ -22,9 +22,16 @@ namespace ebp {
 
 namespace {
 
-static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, n) == 36 &&
-                  offsetof(LeafTri, d) == 48 && offsetof(LeafTri, flags) == 56,
-              "16-byte loads at a, b, c, n stay in the record; n, d contiguous");
+static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, normal) == 36 &&
+                  offsetof(LeafTri, d) == 40 && offsetof(LeafTri, tri_flags) == 44 && sizeof(LeafTri) == 48,
+              "16-byte loads at a, b, c and at byte 32 (c.z, normal, d, tri_flags) stay in the record");
+/// The byte offset of the record's last row: c.z, normal, d, tri_flags.
+constexpr std::size_t kPlaneRow = 32;
+/// The flags' bits, moved to bit 31 by a left shift (kRefPositive is there already).
+constexpr int kDegenerateShift = 1, kNoPlaneShift = 2;
+static_assert(kDegenerate << kDegenerateShift == 1u << 31 && kNoPlane << kNoPlaneShift == 1u << 31 &&
+                  kRefPositive == 1u << 31,
+              "flags at bits 31, 30, 29 of tri_flags");
 constexpr float kInf = std::numeric_limits<float>::infinity();
 /// Shewchuk's first-stage error bound of orient3d, as in predicates.hpp.
 constexpr double kOrientErrBoundA = 7.7715611723761027e-16;
@@ -49,33 +56,57 @@ inline unsigned low_bits(unsigned m) { return m >= 32 ? ~0u : (1u << m) - 1u; }
 
 // --- baseline ---------------------------------------------------------------------------------
 
+#if defined(__SSE2__)
+/// The face-plane values of four records from their last rows, transposed (code, d, tri_flags):
+/// face_plane_value's operations lane-wise. v[3] (optional): the decoded normals.
+inline __m128 face_values_sse2(__m128 code, __m128 d, __m128 fl, const float p[3], __m128* v = nullptr) {
+  const __m128i c = _mm_castps_si128(code);
+  const __m128 S = _mm_set1_ps(kOctScale), SIGN = _mm_set1_ps(-0.0f);
+  const __m128 u = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(c, 16), 16)), S);
+  const __m128 w = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(c, 16)), S);
+  const __m128 z = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(1.0f), _mm_andnot_ps(SIGN, u)), _mm_andnot_ps(SIGN, w));
+  const __m128 t = _mm_max_ps(_mm_xor_ps(z, SIGN), _mm_setzero_ps());
+  const __m128 x = _mm_sub_ps(u, _mm_or_ps(_mm_and_ps(u, SIGN), t)), y = _mm_sub_ps(w, _mm_or_ps(_mm_and_ps(w, SIGN), t));
+  const __m128 val = _mm_sub_ps(
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, _mm_set1_ps(p[0])), _mm_mul_ps(y, _mm_set1_ps(p[1]))),
+                 _mm_mul_ps(z, _mm_set1_ps(p[2]))),
+      d);
+  if (v) v[0] = x, v[1] = y, v[2] = z;
+  const __m128 no_plane = _mm_castsi128_ps(_mm_srai_epi32(_mm_slli_epi32(_mm_castps_si128(fl), kNoPlaneShift), 31));
+  return _mm_andnot_ps(no_plane, val);
+}
+
+/// The last rows of blk[j, j + 4), transposed: c.z, code, d, tri_flags.
+inline void plane_rows_sse2(const LeafTri* blk, unsigned j, __m128 r[4]) {
+  auto row = [&](unsigned i) { return _mm_loadu_ps(reinterpret_cast<const float*>(reinterpret_cast<const char*>(blk + i) + kPlaneRow)); };
+  r[0] = row(j), r[1] = row(j + 1), r[2] = row(j + 2), r[3] = row(j + 3);
+  _MM_TRANSPOSE4_PS(r[0], r[1], r[2], r[3]);
+}
+#endif
+
 unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8], unsigned ref_sides) {
-  const float px = p[0], py = p[1], pz = p[2];
   unsigned gt = 0, lt = 0, pos = 0, deg = 0;
   unsigned j = 0;
 #if defined(__SSE2__)
-  const __m128 PX = _mm_set1_ps(px), PY = _mm_set1_ps(py), PZ = _mm_set1_ps(pz);
   const __m128 EP = _mm_set1_ps(eps), EN = _mm_set1_ps(-eps);
   for (; j + 4 <= m; j += 4) {
-    __m128 r0 = _mm_loadu_ps(blk[j].n), r1 = _mm_loadu_ps(blk[j + 1].n), r2 = _mm_loadu_ps(blk[j + 2].n),
-           r3 = _mm_loadu_ps(blk[j + 3].n);
-    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // nx, ny, nz, d of the four
-    const __m128 v = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(r0, PX), _mm_mul_ps(r1, PY)), _mm_mul_ps(r2, PZ)), r3);
+    __m128 r[4];
+    plane_rows_sse2(blk, j, r);
+    const __m128 v = face_values_sse2(r[1], r[2], r[3], p);
     gt |= unsigned(_mm_movemask_ps(_mm_cmpgt_ps(v, EP))) << j;
     lt |= unsigned(_mm_movemask_ps(_mm_cmplt_ps(v, EN))) << j;
     _mm_storeu_ps(s + j, v);
   }
 #endif
   for (; j < m; ++j) {
-    const LeafTri& t = blk[j];
-    const float v = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    const float v = face_plane_value(blk[j], p);
     s[j] = v;
     gt |= unsigned(v > eps) << j;
     lt |= unsigned(v < -eps) << j;
   }
   for (j = 0; j < m; ++j) {
-    pos |= (blk[j].flags & kRefPositive ? 1u : 0u) << j;
-    deg |= (blk[j].flags & kDegenerate ? 1u : 0u) << j;
+    pos |= (blk[j].flags() & kRefPositive ? 1u : 0u) << j;
+    deg |= (blk[j].flags() & kDegenerate ? 1u : 0u) << j;
   }
   if (ref_sides != kRefSidesFromFlags) pos = ref_sides;
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
@@ -88,7 +119,7 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
   const __m128 LO = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), HI = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    if (!with_degenerate && (t.flags & kDegenerate)) continue;
+    if (!with_degenerate && (t.flags() & kDegenerate)) continue;
     const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
     const __m128 tlo = _mm_min_ps(_mm_min_ps(A, B), C), thi = _mm_max_ps(_mm_max_ps(A, B), C);
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(thi, LO), _mm_cmpgt_ps(tlo, HI))) == 0) hit |= 1u << j;
@@ -96,7 +127,7 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
 #else
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    if (!with_degenerate && (t.flags & kDegenerate)) continue;
+    if (!with_degenerate && (t.flags() & kDegenerate)) continue;
     bool meets = true;
     for (int a = 0; a < 3; ++a) {
       const float tl = std::min(std::min(t.a[a], t.b[a]), t.c[a]), th = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
@@ -114,7 +145,7 @@ unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3]
   unsigned keep = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    const float s = std::fabs(t.n[0] * p[0] + t.n[1] * p[1] + t.n[2] * p[2] - t.d);
+    const float s = face_plane_distance(t, p);
     float sum = 0;
     for (int a = 0; a < 3; ++a) {
       const float lo = std::min(std::min(t.a[a], t.b[a]), t.c[a]), hi = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
@@ -189,12 +220,13 @@ unsigned edge_signs_baseline(const Vec3d& p, const Vec3d& q, const float a[3], c
 
 #define EBP_AVX2 __attribute__((target("avx2")))
 
-/// The flags of blk[0, m) in 8 lanes (lanes >= m: 0, not read).
-EBP_AVX2 inline __m256i gather_flags(const LeafTri* blk, unsigned m) {
-  const __m256i idx = _mm256_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112);  // 64-byte records, in ints
+/// The tri_flags of blk[0, m) in 8 lanes (lanes >= m: 0, not read).
+EBP_AVX2 inline __m256i gather_tri_flags(const LeafTri* blk, unsigned m) {
+  constexpr int kStride = int(sizeof(LeafTri) / 4);  // records, in ints
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i idx = _mm256_mullo_epi32(lane, _mm256_set1_epi32(kStride));
   const __m256i live = _mm256_cmpgt_epi32(_mm256_set1_epi32(int(m)), lane);
-  return _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(&blk[0].flags), idx, live, 4);
+  return _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(&blk[0].tri_flags), idx, live, 4);
 }
 
 /// Row j of 8 records at byte offset `off` (16 bytes), zero for j >= m (never read past the block).
@@ -221,28 +253,45 @@ EBP_AVX2 inline void columns(const LeafTri* blk, unsigned m, __m256 out[4]) {
   out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
 }
 
-/// ((nx p0 + ny p1) + nz p2) - d per lane, from columns n = (nx, ny, nz, d): the face-plane value
-/// every kernel and the distance search's per-triangle test evaluate, in the same order.
-EBP_AVX2 inline __m256 face_plane_values(const __m256 n[4], const float p[3]) {
-  return _mm256_sub_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(n[0], _mm256_set1_ps(p[0])), _mm256_mul_ps(n[1], _mm256_set1_ps(p[1]))),
-                    _mm256_mul_ps(n[2], _mm256_set1_ps(p[2]))),
-      n[3]);
+/// The face-plane values of 8 records from their last rows' columns (code, d, tri_flags):
+/// face_plane_value's operations lane-wise. v[3] (optional): the decoded normals.
+EBP_AVX2 inline __m256 face_values_avx2(__m256 code, __m256 d, __m256 fl, const float p[3], __m256* v = nullptr) {
+  const __m256i c = _mm256_castps_si256(code);
+  const __m256 S = _mm256_set1_ps(kOctScale), SIGN = _mm256_set1_ps(-0.0f);
+  const __m256 u = _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(c, 16), 16)), S);
+  const __m256 w = _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_srai_epi32(c, 16)), S);
+  const __m256 z =
+      _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_andnot_ps(SIGN, u)), _mm256_andnot_ps(SIGN, w));
+  const __m256 t = _mm256_max_ps(_mm256_xor_ps(z, SIGN), _mm256_setzero_ps());
+  const __m256 x = _mm256_sub_ps(u, _mm256_or_ps(_mm256_and_ps(u, SIGN), t));
+  const __m256 y = _mm256_sub_ps(w, _mm256_or_ps(_mm256_and_ps(w, SIGN), t));
+  const __m256 val = _mm256_sub_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, _mm256_set1_ps(p[0])), _mm256_mul_ps(y, _mm256_set1_ps(p[1]))),
+                    _mm256_mul_ps(z, _mm256_set1_ps(p[2]))),
+      d);
+  if (v) v[0] = x, v[1] = y, v[2] = z;
+  const __m256 no_plane =
+      _mm256_castsi256_ps(_mm256_srai_epi32(_mm256_slli_epi32(_mm256_castps_si256(fl), kNoPlaneShift), 31));
+  return _mm256_andnot_ps(no_plane, val);
+}
+
+/// The masks of the flags in the tri_flags column: kRefPositive (*pos) and kDegenerate (*deg).
+EBP_AVX2 inline void flag_masks_avx2(__m256 fl, unsigned* pos, unsigned* deg) {
+  *pos = unsigned(_mm256_movemask_ps(fl));
+  *deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(_mm256_castps_si256(fl), kDegenerateShift))));
 }
 
 EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8],
                                    unsigned ref_sides) {
-  __m256 n[4];
-  columns<offsetof(LeafTri, n)>(blk, m, n);
-  const __m256 v = face_plane_values(n, p);
+  __m256 r[4];
+  columns<kPlaneRow>(blk, m, r);  // c.z, code, d, tri_flags
+  const __m256 v = face_values_avx2(r[1], r[2], r[3], p);
   _mm256_storeu_ps(s, v);
   const unsigned gt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(eps), _CMP_GT_OQ)));
   const unsigned lt = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, _mm256_set1_ps(-eps), _CMP_LT_OQ)));
-  const __m256i fl = gather_flags(blk, m);
-  const unsigned pos = ref_sides != kRefSidesFromFlags
-                           ? ref_sides
-                           : unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 31))));  // kRefPositive
-  const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(fl, 30))));  // kDegenerate
+  unsigned pos, deg;
+  flag_masks_avx2(r[3], &pos, &deg);
+  if (ref_sides != kRefSidesFromFlags) pos = ref_sides;
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
@@ -264,7 +313,8 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
     miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
   }
   if (with_degenerate) return ~miss & low_bits(m);
-  const unsigned deg = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(gather_flags(blk, m), 30))));
+  const unsigned deg = unsigned(_mm256_movemask_ps(
+      _mm256_castsi256_ps(_mm256_slli_epi32(gather_tri_flags(blk, m), kDegenerateShift))));
   return ~(miss | deg) & low_bits(m);
 }
 
@@ -272,12 +322,15 @@ EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3
 EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
                                      const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8],
                                      float box_d2[8]) {
-  __m256 n[4], a[4], b[4], c[4];
-  columns<offsetof(LeafTri, n)>(blk, m, n);  // nx, ny, nz, d
+  __m256 r[4], a[4], b[4], c[4], v[3];
+  columns<kPlaneRow>(blk, m, r);             // c.z, code, d, tri_flags
   columns<offsetof(LeafTri, a)>(blk, m, a);  // ax, ay, az (lane 3: bx, unused)
   columns<offsetof(LeafTri, b)>(blk, m, b);
   columns<offsetof(LeafTri, c)>(blk, m, c);
-  const __m256 abs_s = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), face_plane_values(n, p));
+  const __m256 value = face_values_avx2(r[1], r[2], r[3], p, v);
+  const __m256 len = _mm256_sqrt_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(v[0], v[0]), _mm256_mul_ps(v[1], v[1])), _mm256_mul_ps(v[2], v[2])));
+  const __m256 abs_s = _mm256_div_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), value), len);
   __m256 sum = _mm256_setzero_ps();
   for (int k = 0; k < 3; ++k) {
     const __m256 lo = _mm256_min_ps(_mm256_min_ps(a[k], b[k]), c[k]), hi = _mm256_max_ps(_mm256_max_ps(a[k], b[k]), c[k]);

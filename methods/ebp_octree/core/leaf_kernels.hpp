@@ -10,9 +10,11 @@
 /// order without FMA (this file is compiled with -ffp-contract=off), so their results are bit
 /// for bit the same and the choice never changes an answer or a counter.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "harness/core/geometry.hpp"
+#include "methods/ebp_octree/core/face_normal.hpp"
 #include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 
@@ -32,6 +34,26 @@ inline double box_d2(const BlockBox& b, const Vec3d& p) {
   return d2;
 }
 
+/// The face-plane value of t at p (in the leaf's frame): ((v0 p0 + v1 p1) + v2 p2) - d in float,
+/// v = t's decoded normal (face_normal.hpp); 0 for a triangle with no plane (kNoPlane). Its sign
+/// is orient3d(a, b, c, p)'s where its magnitude exceeds the leaf's eps. The kernels' plane_pass
+/// gives the same bits.
+inline float face_plane_value(const LeafTri& t, const float p[3]) {
+  if (t.flags() & kNoPlane) return 0.0f;
+  float v[3];
+  decode_face_normal(t.normal, v);
+  return ((v[0] * p[0] + v[1] * p[1]) + v[2] * p[2]) - t.d;
+}
+
+/// |face_plane_value(t, p)| / |v|, |v| = sqrt((v0 v0 + v1 v1) + v2 v2) in float: within the
+/// distance search's eps_p of the distance from p to t's plane, so a lower bound on the distance
+/// to t up to that error. The kernels' distance_pass gives the same bits.
+inline float face_plane_distance(const LeafTri& t, const float p[3]) {
+  float v[3];
+  decode_face_normal(t.normal, v);
+  return std::fabs(face_plane_value(t, p)) / std::sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
+}
+
 /// plane_pass's `ref_sides` for the leaf's own reference point: its sides are the LeafTris'
 /// kRefPositive flags.
 inline constexpr unsigned kRefSidesFromFlags = ~0u;
@@ -47,8 +69,8 @@ bool cpu_has_avx2();
 /// The kernels, as one table: fetch it once per query (leaf_kernel_table()) and call through it.
 struct LeafKernelTable {
   /// Plane pass of the reference path over blk[0, m), 1 <= m <= 8. p = the query point in the
-  /// leaf's frame (float(p - centre) per axis). Writes s[j] = ((n0 p0 + n1 p1) + n2 p2) - d in
-  /// float for j < m and returns the bit mask (bit j) of the triangles the exact stage must look
+  /// leaf's frame (float(p - centre) per axis). Writes s[j] = face_plane_value(blk[j], p) for
+  /// j < m and returns the bit mask (bit j) of the triangles the exact stage must look
   /// at: not kDegenerate, and not strictly on the reference's side (s > eps with the reference
   /// on the outer side, s < -eps with it on the inner side). `ref_sides`: bit j set when the
   /// reference is on triangle j's outer side (a sub-reference's mask, Octree::sub_sides), or
@@ -74,8 +96,7 @@ struct LeafKernelTable {
   unsigned (*edge_signs)(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]);
   /// The distance query's pre-filter over blk[0, m), 1 <= m <= 8, before its per-triangle tests
   /// (query_distance.cpp): the bit mask of the triangles it keeps. It clears a triangle when its
-  /// face-plane value |((n0 p0 + n1 p1) + n2 p2) - d| (float, p in the leaf's frame) exceeds
-  /// plane_lim, or when the squared distance from the box [q_lo, q_hi] (the query point in the
+  /// face-plane distance (face_plane_distance, p in the leaf's frame) exceeds plane_lim, or when the squared distance from the box [q_lo, q_hi] (the query point in the
   /// tree's frame rounded outwards to float) to the triangle's float box, ((0 + g0 g0) + g1 g1)
   /// + g2 g2 in float, exceeds box_lim. With the limits the caller sets
   /// (distance_prefilter_limits) every triangle cleared is strictly farther than the best they

@@ -46,10 +46,10 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni) {
     const LeafTri& tr = tris[kk];
     if (several) {
-      std::uint32_t h = (tr.tri * 0x9E3779B1u) >> 24;  // 8 bits: kSlots = 128 ... 256
+      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> 24;  // 8 bits: kSlots = 128 ... 256
       for (h %= kSlots; seen[h] != UINT32_MAX; h = (h + 1) % kSlots)
-        if (seen[h] == tr.tri) return;
-      seen[h] = tr.tri;
+        if (seen[h] == tr.tri()) return;
+      seen[h] = tr.tri();
     }
     if (n == kNearMax) {
       ok = false;

@@ -24,8 +24,9 @@
 ///   planes   : the plane pool; a node's bounding planes are planes[plane_begin, +plane_count),
 ///              n.(x - root_centre) <= d, n unit (float), d rounded up so containment survives.
 ///   leaves   : one record per grey leaf (reference point and its colour, triangle block).
-///   tris     : per-leaf triangle blocks, 64 bytes (one cache line) per reference: inline float
-///              coordinates, the face plane in the leaf's frame and the input triangle index.
+///   tris     : per-leaf triangle blocks, 48 bytes per reference: inline float coordinates, the
+///              face plane in the leaf's frame (octahedral normal, offset) and the input
+///              triangle index with the reference's flags.
 #include <algorithm>
 #include <array>
 #include <cstddef>
@@ -69,20 +70,30 @@ struct Plane {
 };
 static_assert(sizeof(Plane) == 16, "Plane is 16 bytes");
 
-/// One triangle reference in a leaf block. Coordinates are the input's in the tree's frame
-/// (input - origin, in double), rounded to float (the structure's geometry); all exact predicates
-/// run on exactly these values.
+/// The flags of a LeafTri, in the top bits of LeafTri::tri_flags (the input index in the rest).
+inline constexpr std::uint32_t kRefPositive = 1u << 31;  ///< the leaf's reference point is on the outer side
+inline constexpr std::uint32_t kDegenerate = 1u << 30;   ///< zero area (exactly collinear): no parity role
+inline constexpr std::uint32_t kNoPlane = 1u << 29;      ///< no face plane (degenerate or sliver): its value is 0
+inline constexpr std::uint32_t kTriIndexMask = kNoPlane - 1;
+/// The most input triangles a tree can index (the index shares its word with the flags).
+inline constexpr std::uint64_t kMaxTriangles = std::uint64_t(kTriIndexMask) + 1;
+
+/// One triangle reference in a leaf block, 48 bytes. Coordinates are the input's in the tree's
+/// frame (input - origin, in double), rounded to float (the structure's geometry); all exact
+/// predicates run on exactly these values. The face plane is a filter only: its normal is an
+/// octahedral code (face_normal.hpp) and d its offset for the decoded normal v, so that the face
+/// plane value v.(p - leaf centre) - d has the sign of orient3d(a, b, c, p) wherever its
+/// magnitude exceeds the leaf's eps.
 struct LeafTri {
   float a[3], b[3], c[3];
-  float n[3];    ///< unit face normal (float); zero for slivers whose normal is ill-conditioned
-  float d;       ///< face plane n.(x - leaf centre) = d
-  std::uint32_t tri;    ///< index of the triangle in the input mesh
-  std::uint32_t flags;  ///< kRefPositive | kDegenerate
-  float pad;
+  std::uint32_t normal;     ///< octahedral code of the unit face normal (decode_face_normal)
+  float d;                  ///< face plane v.(x - leaf centre) = d, v the decoded normal
+  std::uint32_t tri_flags;  ///< index of the triangle in the input mesh | kRefPositive | kDegenerate | kNoPlane
+  std::uint32_t tri() const { return tri_flags & kTriIndexMask; }
+  std::uint32_t flags() const { return tri_flags & ~kTriIndexMask; }
+  void set_tri(std::uint32_t t) { tri_flags = flags() | t; }
 };
-static_assert(sizeof(LeafTri) == 64, "LeafTri is one cache line");
-inline constexpr std::uint32_t kRefPositive = 1;  ///< the leaf's reference point is on the outer side
-inline constexpr std::uint32_t kDegenerate = 2;   ///< zero area (exactly collinear): no parity role
+static_assert(sizeof(LeafTri) == 48, "LeafTri is 48 bytes");
 
 struct Leaf {
   float centre[3];           ///< cell centre (float; the frame of the LeafTri planes)

@@ -192,12 +192,12 @@ class Query::DistanceSearch {
     // The set lists each input triangle once, and a served search tests nothing before it but
     // the seed: the members need no once-per-query stamp (a load and a store in an array over
     // all triangles, a cache miss on large meshes), only the seed's exclusion.
-    const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri : UINT32_MAX;
+    const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
     for (std::uint32_t i = 0; i < m; ++i) {
       if (cand[i].first > lim2) break;  // lim2 follows the best down
       const std::uint32_t j = cand[i].second;
       const LeafTri& t = tris[ns.k[j]];
-      if (t.tri == seed) continue;
+      if (t.tri() == seed) continue;
       scan_node = ns.node[j];
       evaluate(t, ns.k[j], ns.leaf[j]);
     }
@@ -249,8 +249,8 @@ class Query::DistanceSearch {
   /// the best becomes it if it is smaller by (squared distance, key).
   void test_triangle(std::uint32_t k, std::uint32_t leaf) {
     const LeafTri& t = tris[k];
-    if (stamp_[t.tri] == qid) return;
-    stamp_[t.tri] = qid;
+    if (stamp_[t.tri()] == qid) return;
+    stamp_[t.tri()] = qid;
     evaluate(t, k, leaf);
   }
 
@@ -262,14 +262,14 @@ class Query::DistanceSearch {
     const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
     const double d2 = squared_norm(q - p);
     if (B.collect) {  // a certificate's renewal: the collector keeps it and sets the prune radius
-      const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
+      const std::uint64_t key = key_of ? key_of[t.tri()] : t.tri();
       B.best = B.collect->offer(d2, q, key, t, TriangleSite{B.collect_page, k, leaf, scan_node});
       B.best2 = B.best * B.best;  // the prune radius, for the triangles' box test
       lim2 = (B.best + tol) * (B.best + tol);
       return;
     }
     if (!(d2 <= B.best2)) return;  // (a NaN never wins, as before)
-    const std::uint64_t key = key_of ? key_of[t.tri] : t.tri;
+    const std::uint64_t key = key_of ? key_of[t.tri()] : t.tri();
     if (d2 < B.best2 || key < B.key) {
       B.best2 = d2;
       B.best = std::sqrt(d2);
@@ -292,11 +292,12 @@ class Query::DistanceSearch {
     const Leaf& lf = leaves[li];
     const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
                 pz = float(p.z - double(lf.centre[2]));
-    // lf.eps bounds the float error of a face-plane value for points near the leaf; the error
+    // lf.eps bounds the error of a face-plane distance for points near the leaf; the error
     // grows with p's distance from the leaf centre (the rounding of px, py, pz and of the
-    // products), so far points get the extra term, or they could lose their closest triangle.
-    const double eps_p = double(lf.eps) +
-                         1e-6 * (double(std::fabs(px)) + double(std::fabs(py)) + double(std::fabs(pz)));
+    // products, and the quantized normal's direction: face_normal.hpp), so far points get the
+    // extra term, or they could lose their closest triangle.
+    const double eps_p = double(lf.eps) + kPlaneEpsGrowth * (double(std::fabs(px)) + double(std::fabs(py)) +
+                                                              double(std::fabs(pz)));
     if (!q_bounds_) {  // once per search, and only for a search that scans a leaf (a page's often does not)
       for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
       q_bounds_ = true;
@@ -635,7 +636,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
   r.distance = b.best;
   r.closest = b.closest;
   r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
-  r.triangle = std::int64_t(t.tri);
+  r.triangle = std::int64_t(t.tri());
   if (coherent_) {
     last_tri_ = b.k;
     last_leaf_ = b.leaf;

@@ -93,8 +93,8 @@ namespace {
 template <class QSide>
 bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint32_t n, const Leaf& lf,
                   QSide&& q_side, QueryCounters& cnt, int* delta, bool* on_surface) {
-  const float px = float(p.x - double(lf.centre[0])), py = float(p.y - double(lf.centre[1])),
-              pz = float(p.z - double(lf.centre[2]));
+  const float pl[3] = {float(p.x - double(lf.centre[0])), float(p.y - double(lf.centre[1])),
+                       float(p.z - double(lf.centre[2]))};
   const float eps = lf.eps;
   // The segment's bounding box: a triangle whose box misses it cannot be crossed (exact
   // comparisons of exact values, so this filter never changes an answer).
@@ -104,8 +104,8 @@ bool leaf_winding(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::uint3
   cnt.planes_tested += n;
   for (std::uint32_t k = 0; k < n; ++k) {
     const LeafTri& t = blk[k];
-    if (t.flags & kDegenerate) continue;
-    const float s = t.n[0] * px + t.n[1] * py + t.n[2] * pz - t.d;
+    if (t.flags() & kDegenerate) continue;
+    const float s = face_plane_value(t, pl);
     const int sq = q_side(k);
     int sp;
     if (s > eps) sp = 1;
@@ -162,8 +162,8 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
     if (sp == sq) return 1;
     ++cnt.triangles_tested;
 #if defined(__SSE2__)
-    static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, n) == 36,
-                  "a, b, c, n contiguous: 16-byte loads at a, b, c stay in the record");
+    static_assert(offsetof(LeafTri, b) == 12 && offsetof(LeafTri, c) == 24 && offsetof(LeafTri, normal) == 36,
+                  "a, b, c, normal contiguous: 16-byte loads at a, b, c stay in the record");
     const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
     const __m128 lo = _mm_min_ps(_mm_min_ps(A, B), C), hi = _mm_max_ps(_mm_max_ps(A, B), C);
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(hi, SLO), _mm_cmpgt_ps(lo, SHI))) != 0) return 1;
@@ -191,7 +191,7 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
       const unsigned sides = q_sides ? q_sides[8 * b] : kRefSidesFromFlags;
       for (unsigned todo = K.plane_pass(blk + k, m, pl, eps, s, sides); todo; todo &= todo - 1) {
         const unsigned j = unsigned(__builtin_ctz(todo));
-        const bool q_outer = q_sides ? (sides >> j & 1u) != 0 : (blk[k + j].flags & kRefPositive) != 0;
+        const bool q_outer = q_sides ? (sides >> j & 1u) != 0 : (blk[k + j].flags() & kRefPositive) != 0;
         if (!one(k + j, s[j], q_outer ? 1 : -1)) return false;
       }
     }
@@ -252,7 +252,7 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   int w = prev_w_;
   auto test = [&](std::uint32_t k) {  // 1: go on, 0: p on a triangle, -1: give up
     const LeafTri& t = tris[k];
-    if (t.flags & kDegenerate) return 1;  // zero area: crosses nothing
+    if (t.flags() & kDegenerate) return 1;  // zero area: crosses nothing
     const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
     ++counters.planes_tested;
     const int sq = orient3d(a, b, c, q);

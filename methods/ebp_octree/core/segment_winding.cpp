@@ -13,7 +13,7 @@ bool segment_winding(const Vec3d& p, const Vec3d& q, const LeafTri* const* list,
   int w = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const LeafTri& t = *list[i];
-    if (t.flags & kDegenerate) continue;
+    if (t.flags() & kDegenerate) continue;
     const Vec3d a = to_d(t.a), b = to_d(t.b), c = to_d(t.c);
     const int sp = orient3d(a, b, c, p), sq = orient3d(a, b, c, q);
     if (sp == 0 && sq == 0) {

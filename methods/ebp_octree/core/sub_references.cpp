@@ -29,7 +29,7 @@ bool sides_of(const LeafTri* blk, std::uint32_t n, const Leaf& lf, const Vec3d& 
     K.plane_pass(blk + k0, m, pl, lf.eps, s, kRefSidesFromFlags);
     for (unsigned j = 0; j < m; ++j) {
       const LeafTri& t = blk[k0 + j];
-      if (t.flags & kDegenerate) continue;
+      if (t.flags() & kDegenerate) continue;
       const int o = s[j] > lf.eps ? 1 : s[j] < -lf.eps ? -1 : orient3d(to_d(t.a), to_d(t.b), to_d(t.c), r);
       if (o == 0) return false;
       side[k0 + j] = o;
@@ -82,8 +82,8 @@ void compute_sub_references(Octree& t) {
         const float s1[3] = {float(std::max(r.x, ref.x)), float(std::max(r.y, ref.y)), float(std::max(r.z, ref.z))};
         for (std::uint32_t k = 0; k < n && ok; ++k) {
           const LeafTri& tr = blk[k];
-          if (tr.flags & kDegenerate) continue;
-          const int sq = (tr.flags & kRefPositive) ? 1 : -1;
+          if (tr.flags() & kDegenerate) continue;
+          const int sq = (tr.flags() & kRefPositive) ? 1 : -1;
           if (side[k] == sq) continue;
           // A triangle whose box misses the segment's cannot cross it (r and ref are floats, so
           // the segment's box is exact in float).
@@ -106,7 +106,7 @@ void compute_sub_references(Octree& t) {
         sr.valid = 1;
         std::uint8_t* masks = &t.sub_sides[std::size_t(t.leaf_block[li]) * 8];
         for (std::uint32_t k = 0; k < n; ++k)
-          if (side[k] > 0 && !(blk[k].flags & kDegenerate)) masks[(k / kBlockTris) * 8 + std::size_t(o)] |= std::uint8_t(1u << (k % kBlockTris));
+          if (side[k] > 0 && !(blk[k].flags() & kDegenerate)) masks[(k / kBlockTris) * 8 + std::size_t(o)] |= std::uint8_t(1u << (k % kBlockTris));
         break;
       }
     }

@@ -30,8 +30,10 @@
 namespace ebp {
 
 inline constexpr char kStoreMagic[8] = {'E', 'B', 'P', 'O', 'C', 'T', '\r', '\n'};
-/// 2: coordinates in the tree's frame (FileHeader::origin); version 1 stored world coordinates.
-inline constexpr std::uint32_t kStoreVersion = 2;
+/// 3: 48-byte LeafTris (octahedral face normals, flags in the index's top bits).
+/// 2 stored 64-byte LeafTris (float face normals); 1 also stored world coordinates, not the tree's
+/// frame (FileHeader::origin). Older versions are refused with what changed (reader.cpp).
+inline constexpr std::uint32_t kStoreVersion = 3;
 inline constexpr std::uint32_t kPageMagic = 0x47504245u;  // "EBPG"
 inline constexpr std::uint64_t kPageAlign = 4096;
 inline constexpr std::uint64_t kMaxPageBytes = std::uint64_t(1) << 30;  ///< reader's limit per page

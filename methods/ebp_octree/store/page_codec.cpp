@@ -19,11 +19,11 @@ bool finite3(const float* f) { return std::isfinite(f[0]) && std::isfinite(f[1])
 EncodedPage encode_page(PageArrays& a, std::uint32_t id, Octcode parent, PageEntry* e) {
   std::vector<std::uint32_t> local;
   local.reserve(a.tris.size());
-  for (const LeafTri& lt : a.tris) local.push_back(lt.tri);
+  for (const LeafTri& lt : a.tris) local.push_back(lt.tri());
   std::sort(local.begin(), local.end());
   local.erase(std::unique(local.begin(), local.end()), local.end());
   for (LeafTri& lt : a.tris)
-    lt.tri = std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri) - local.begin());
+    lt.set_tri(std::uint32_t(std::lower_bound(local.begin(), local.end(), lt.tri()) - local.begin()));
 
   PageHeader ph{};
   ph.magic = kPageMagic;
@@ -153,9 +153,9 @@ void check_records(const PageHeader& ph, const Page& page, const PageContext& c,
     if (std::uint64_t(lf.tri_begin) + lf.tri_count > ph.ntris) fail("leaf triangle block out of bounds");
   }
   for (const LeafTri& lt : T.tris) {
-    if (!finite3(lt.a) || !finite3(lt.b) || !finite3(lt.c) || !finite3(lt.n) || !std::isfinite(lt.d))
-      fail("non-finite triangle");
-    if (lt.tri >= ph.nlocal) fail("triangle index out of range");
+    if (!finite3(lt.a) || !finite3(lt.b) || !finite3(lt.c) || !std::isfinite(lt.d)) fail("non-finite triangle");
+    if ((lt.normal & 0xFFFFu) == 0x8000u || (lt.normal >> 16) == 0x8000u) fail("bad face normal code");
+    if (lt.tri() >= ph.nlocal) fail("triangle index out of range");
   }
   for (std::uint32_t k = 0; k < ph.nlocal; ++k)
     if (page.global_tri[k] >= c.num_triangles || (k > 0 && page.global_tri[k] <= page.global_tri[k - 1]))

@@ -106,9 +106,13 @@ void StoreReader::check_header() {
     fail("truncated: " + std::to_string(file_size_) + " bytes, smaller than the 512-byte header");
   read_at(0, &h_, sizeof h_);
   if (std::memcmp(h_.magic, kStoreMagic, 8) != 0) fail("not an EBP-Octree store (bad magic)");
-  if (h_.version == 1)
-    fail("store format version 1 (world coordinates), written by an older bvhbench; this build reads version " +
-         std::to_string(kStoreVersion) + " (coordinates relative to a frame origin): rebuild it with `bvhbench ebp build`");
+  if (h_.version == 1 || h_.version == 2) {
+    const char* what = h_.version == 1 ? " (world coordinates, 64-byte triangle records)" : " (64-byte triangle records)";
+    fail("store format version " + std::to_string(h_.version) + what +
+         ", written by an older bvhbench; this build reads version " + std::to_string(kStoreVersion) +
+         " (coordinates relative to a frame origin, 48-byte triangle records): rebuild it with "
+         "`bvhbench ebp build --mesh MESH --out STORE`");
+  }
   if (h_.version != kStoreVersion)
     fail("unsupported store version " + std::to_string(h_.version) + " (this build reads version " +
          std::to_string(kStoreVersion) + ")");
@@ -292,7 +296,7 @@ Octree StoreReader::load_all() const {
       const auto tb = std::uint32_t(T.tris.size());
       for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
         LeafTri lt = pg.tree.tris[lf.tri_begin + k];
-        lt.tri = pg.global_tri[lt.tri];
+        lt.set_tri(pg.global_tri[lt.tri()]);
         T.tris.push_back(lt);
       }
       lf.tri_begin = tb;

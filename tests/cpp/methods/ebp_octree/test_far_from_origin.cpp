@@ -232,7 +232,7 @@ TEST(EbpFarFromOrigin, OrdinaryModelsKeepTheOrigin) {
   const Octree t = build_octree(torus.vertices, torus.triangles, BuildParams{});
   EXPECT_EQ(t.origin, Vec3d(0, 0, 0));
   for (const LeafTri& lt : t.tris) {
-    const auto& tri = torus.triangles[lt.tri];
+    const auto& tri = torus.triangles[lt.tri()];
     for (int k = 0; k < 3; ++k) ASSERT_EQ(lt.a[k], float(torus.vertices[tri[0]][k]));
   }
 }

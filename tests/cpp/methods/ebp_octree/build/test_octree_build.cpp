@@ -33,7 +33,7 @@ TEST(EbpBuild, DistributionIsExactOnCow) {
     if (nd.kind != NodeKind::leaf) continue;
     EXPECT_EQ(octcode_level(nd.code), L);
     const Leaf& lf = t.leaves[nd.index];
-    for (std::uint32_t k = 0; k < lf.tri_count; ++k) listed[t.tris[lf.tri_begin + k].tri].insert(octcode_morton(nd.code));
+    for (std::uint32_t k = 0; k < lf.tri_count; ++k) listed[t.tris[lf.tri_begin + k].tri()].insert(octcode_morton(nd.code));
   }
   const double cs = t.cell_size(L);
   const std::uint32_t G = 1u << L;

@@ -30,6 +30,28 @@ struct KernelsGuard {
   ~KernelsGuard() { set_leaf_kernels(before); }
 };
 
+/// The face plane value, written out: the octahedral code's halves as signed 16-bit fixed point,
+/// folded on the lower hemisphere, dotted with p in order, minus d; 0 without a plane.
+float plane_value_spelled_out(const LeafTri& t, const float p[3]) {
+  if (t.flags() & kNoPlane) return 0.0f;
+  const std::int16_t iu = std::int16_t(t.normal & 0xFFFFu), iv = std::int16_t(t.normal >> 16);
+  const float u = float(iu) * (1.0f / 32767.0f), w = float(iv) * (1.0f / 32767.0f);
+  const float z = 1.0f - std::fabs(u) - std::fabs(w);
+  const float fold = z < 0 ? -z : 0.0f;
+  const float x = u < 0 ? u + fold : u - fold, y = w < 0 ? w + fold : w - fold;
+  float v = x * p[0];
+  v = v + y * p[1];
+  v = v + z * p[2];
+  return v - t.d;
+}
+
+/// The length of the decoded normal, written out.
+float normal_length_spelled_out(const LeafTri& t) {
+  float v[3];
+  decode_face_normal(t.normal, v);
+  return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
 /// The kernels' promise, written out one triangle at a time.
 /// ref_sides: as plane_pass's (kRefSidesFromFlags: the kRefPositive flags).
 unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8],
@@ -37,13 +59,10 @@ unsigned plane_mask_spelled_out(const LeafTri* blk, unsigned m, const float p[3]
   unsigned mask = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    float v = t.n[0] * p[0];
-    v = v + t.n[1] * p[1];
-    v = v + t.n[2] * p[2];
-    v = v - t.d;
+    const float v = plane_value_spelled_out(t, p);
     s[j] = v;
-    const bool ref_pos = ref_sides == kRefSidesFromFlags ? (t.flags & kRefPositive) != 0 : (ref_sides >> j & 1u) != 0;
-    const bool skip = (t.flags & kDegenerate) || (ref_pos && v > eps) || (!ref_pos && v < -eps);
+    const bool ref_pos = ref_sides == kRefSidesFromFlags ? (t.flags() & kRefPositive) != 0 : (ref_sides >> j & 1u) != 0;
+    const bool skip = (t.flags() & kDegenerate) || (ref_pos && v > eps) || (!ref_pos && v < -eps);
     if (!skip) mask |= 1u << j;
   }
   return mask;
@@ -52,7 +71,7 @@ unsigned box_mask_spelled_out(const LeafTri* blk, unsigned m, const float lo[3],
   unsigned mask = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    bool meets = with_degenerate || !(t.flags & kDegenerate);
+    bool meets = with_degenerate || !(t.flags() & kDegenerate);
     for (int a = 0; a < 3; ++a)
       meets = meets && std::max({t.a[a], t.b[a], t.c[a]}) >= lo[a] && std::min({t.a[a], t.b[a], t.c[a]}) <= hi[a];
     if (meets) mask |= 1u << j;
@@ -173,7 +192,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           std::copy(blk, blk + n, flagged);
           const unsigned deg_mask = unsigned(rng() & 0xFF);
           for (unsigned j = 0; j < n; ++j)
-            if (deg_mask >> j & 1u) flagged[j].flags |= kDegenerate;
+            if (deg_mask >> j & 1u) flagged[j].tri_flags |= kDegenerate;
           const unsigned want_box[2] = {box_mask_spelled_out(flagged, n, lo, hi, false),
                                         box_mask_spelled_out(flagged, n, lo, hi, true)};
           degenerate_met += want_box[0] != want_box[1];
@@ -290,8 +309,8 @@ TEST(EbpLeafKernels, DistancePrefilterClearsOnlyTrianglesFartherThanTheBest) {
                 ASSERT_EQ(std::memcmp(&box_d2[j], &first_box[j], 4), 0) << name << ": the box distances differ";
                 // the values the mask was decided on, as the per-triangle tests read them
                 ASSERT_EQ(bool(mask >> j & 1u), !(plane_abs[j] > plane_lim) && !(box_d2[j] > box_lim)) << name;
-                const float s = blk[j].n[0] * p[0] + blk[j].n[1] * p[1] + blk[j].n[2] * p[2] - blk[j].d;
-                ASSERT_EQ(plane_abs[j], std::fabs(s)) << name;
+                const float s = std::fabs(plane_value_spelled_out(blk[j], p)) / normal_length_spelled_out(blk[j]);
+                ASSERT_EQ(plane_abs[j], s) << name;
               }
             }
             for (unsigned j = 0; j < n; ++j) {

@@ -109,7 +109,7 @@ TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
       EXPECT_GE(ns.hi[2], p.z + h);
       std::set<std::uint32_t> got;
       for (std::uint32_t j = 0; j < ns.n; ++j) {
-        EXPECT_TRUE(got.insert(t.tris[ns.k[j]].tri).second) << name << ": a triangle twice";
+        EXPECT_TRUE(got.insert(t.tris[ns.k[j]].tri()).second) << name << ": a triangle twice";
         EXPECT_EQ(t.nodes[ns.node[j]].index, ns.leaf[j]);
       }
       EXPECT_EQ(got, want) << name << " point " << i << " half-width " << h;
@@ -133,7 +133,7 @@ TEST(EbpNearSet, ZeroAreaTrianglesOnlyWhenAsked) {
     NearSet ns;
     EXPECT_TRUE(ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, with_degenerate));
     std::set<std::uint32_t> s;
-    for (std::uint32_t j = 0; j < ns.n; ++j) s.insert(t.tris[ns.k[j]].tri);
+    for (std::uint32_t j = 0; j < ns.n; ++j) s.insert(t.tris[ns.k[j]].tri());
     return s;
   };
   EXPECT_EQ(members(true).count(sliver), 1u);

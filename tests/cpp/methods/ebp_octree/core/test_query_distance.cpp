@@ -109,7 +109,7 @@ TEST(EbpQuery, DistanceBoundEntryPoint) {
       b.key = UINT64_MAX;  // any triangle at exactly the bound wins the tie
       q.distance_bound(p, b, DistanceStart{});
       ASSERT_NE(b.k, UINT32_MAX);
-      ASSERT_EQ(std::int64_t(t.tris[b.k].tri), a.triangle);
+      ASSERT_EQ(std::int64_t(t.tris[b.k].tri()), a.triangle);
       ASSERT_EQ(b.best, a.distance);
       ASSERT_EQ(b.closest, a.closest);
     }
@@ -132,7 +132,7 @@ TEST(EbpQuery, DistanceBoundEntryPoint) {
     for (std::uint32_t i = c; i < t.nodes[c].next; ++i)
       if (t.nodes[i].kind == NodeKind::leaf) {
         const Leaf& lf = t.leaves[t.nodes[i].index];
-        for (std::uint32_t k = 0; k < lf.tri_count; ++k) sub.insert(t.tris[lf.tri_begin + k].tri);
+        for (std::uint32_t k = 0; k < lf.tri_count; ++k) sub.insert(t.tris[lf.tri_begin + k].tri());
       }
     for (std::size_t j = 0; j < pts.size(); j += 5) {
       const Vec3d& p = pts[j];
@@ -148,7 +148,7 @@ TEST(EbpQuery, DistanceBoundEntryPoint) {
       s.node = c;
       q.distance_bound(p, b, s);
       ASSERT_NE(b.k, UINT32_MAX);
-      ASSERT_TRUE(sub.count(t.tris[b.k].tri));
+      ASSERT_TRUE(sub.count(t.tris[b.k].tri()));
       // The subtree stands for its triangles within its cell: at least the best listed one, and
       // exactly it when its closest point is in the cell.
       ASSERT_GE(b.best2, best2);
@@ -157,7 +157,7 @@ TEST(EbpQuery, DistanceBoundEntryPoint) {
       Vec3d lo, hi;
       t.cell_box(t.nodes[c].code, &lo, &hi);
       if (cp.x >= lo.x && cp.y >= lo.y && cp.z >= lo.z && cp.x <= hi.x && cp.y <= hi.y && cp.z <= hi.z) {
-        ASSERT_EQ(t.tris[b.k].tri, bi);
+        ASSERT_EQ(t.tris[b.k].tri(), bi);
         ASSERT_EQ(b.best2, best2);
         ++inside_cell;
       }

@@ -64,7 +64,7 @@ TEST(EbpSubReferences, InsideTheirOctantOffEveryPlaneWithTheMeshsWindingNumber) 
         }
         const LeafTri* blk = t.tris.data() + lf.tri_begin;
         for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
-          if (blk[k].flags & kDegenerate) continue;
+          if (blk[k].flags() & kDegenerate) continue;
           const int side = orient3d(to_d(blk[k].a), to_d(blk[k].b), to_d(blk[k].c), r);
           ASSERT_NE(side, 0) << "leaf " << li;
           const std::uint8_t mask = t.sub_sides[(std::size_t(t.leaf_block[li]) + k / kBlockTris) * 8 + std::size_t(o)];

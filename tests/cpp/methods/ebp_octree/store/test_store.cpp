@@ -204,8 +204,9 @@ TEST(EbpStore, CorruptFilesRejected) {
   variant([&](auto& b) { b.resize(std::size_t(h.pages.offset) + 10); }, "size mismatch");
   variant([](auto& b) { b.clear(); }, "truncated");
   variant([](auto& b) { b[0] = 'X'; }, "bad magic");
-  variant([](auto& b) { b[8] = 3; }, "unsupported store version 3");
+  variant([](auto& b) { b[8] = 4; }, "unsupported store version 4");
   variant([](auto& b) { b[8] = 1; }, "store format version 1");  // world coordinates: rebuild
+  variant([](auto& b) { b[8] = 2; }, "store format version 2 (64-byte triangle records)");  // rebuild
   variant([](auto& b) { b[40] ^= 0x10; }, "header checksum");
   variant([&](auto& b) { b[std::size_t(h.top_nodes.offset) + 3] ^= 1; }, "checksum mismatch in section 'top nodes'");
   variant([&](auto& b) { b[std::size_t(h.directory.offset) + 5] ^= 1; }, "checksum mismatch in section 'directory'");
