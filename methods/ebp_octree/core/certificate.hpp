@@ -229,6 +229,12 @@ class CertifiedPath {
   bool radii(double* r_max, double* r_floor) const;
   /// The mean length of the last kStepWindow steps (0 while none is known): a renewal's scale.
   double mean_step() const;
+  /// Whether the path jumps at the current point, so that certificate_policy=auto renews no
+  /// certificate there: the last step (as step_length measures it, the largest coordinate
+  /// difference) or mean_step() is longer than a leaf cell of edge leaf_cell. false while no step
+  /// is known. A renewal's ball follows the path's mean step: one jump in its window is enough to
+  /// skip renewals.
+  bool jumped(double leaf_cell) const;
   /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
   /// bound tol): that open ball holds no surface point, so the winding number is constant in
   /// it. Only on closed meshes (elsewhere the sign is not a function of the winding number).
@@ -271,15 +277,15 @@ class CertifiedPath {
 /// centre with `cert` as its collector, then finish(), and p is served from the new certificate
 /// (or, if its ball turned out too small to hold p, answered by `plain()`); else (the path's
 /// first point, a plain streak: CertifiedPath::prefer_plain, or under that adaptive policy a
-/// jump: `jumped()`, the last step or the path's mean step longer than a leaf cell) `plain()`,
-/// the branch and bound alone. A jump's renewal would collect a ball of the jump's size (its
-/// radius follows the steps): on random points one trial certificate cost as much as thousands
-/// of plain searches. `work_now()` gives the Work counted so far by every search and scan of
-/// this query state (the choice between certificates and plain searches weighs it). On a
-/// certified answer *site is where its triangle was found (the next renewal's seed). The tree's
-/// root cube: root_lo, root_size.
-template <class Jumped, class WorkNow, class Renew, class Plain>
-DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, Jumped&& jumped, const Vec3d& root_lo,
+/// jump: CertifiedPath::jumped, the last step or the path's mean step longer than a leaf cell of
+/// edge leaf_cell) `plain()`, the branch and bound alone. A jump's renewal would collect a ball
+/// of the jump's size (its radius follows the steps): on random points one trial certificate
+/// cost as much as thousands of plain searches. `work_now()` gives the Work counted so far by
+/// every search and scan of this query state (the choice between certificates and plain searches
+/// weighs it). On a certified answer *site is where its triangle was found (the next renewal's
+/// seed). The tree's root cube: root_lo, root_size.
+template <class WorkNow, class Renew, class Plain>
+DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double leaf_cell, const Vec3d& root_lo,
                                double root_size, QueryCounters& c, TriangleSite* site, WorkNow&& work_now,
                                Renew&& renew, Plain&& plain) {
   path.step_to(p);
@@ -299,7 +305,7 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, Jumped&& jum
     return searched();
   } else if (path.radii(&r_max, &r_floor)) {
     // (a jump's plain search is not what one costs on the path: not in the estimate)
-    if (path.adaptive() && jumped()) return plain();
+    if (path.adaptive() && path.jumped(leaf_cell)) return plain();
     const Vec3d centre = path.ahead(p);
     path.cert.begin(centre, r_max, r_floor, certificate_tol(centre, root_lo, root_size));
     renew(path.cert, centre);

@@ -652,12 +652,8 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
 // The first query of a path has no step yet: a plain search.
 DistanceAnswer Query::certified_distance(const Vec3d& p) {
   TriangleSite site;
-  // (a renewal's ball follows the path's mean step: one jump in its window is enough to skip it)
-  auto jumped = [&] {
-    return last_tri_ != UINT32_MAX && std::max(step_length(p, last_p_), path_->mean_step()) > t_.cell_size(t_.leaf_level);
-  };
   const DistanceAnswer r = certified_query(
-      *path_, p, jumped, t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
+      *path_, p, t_.cell_size(t_.leaf_level), t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         DistanceBest b;
         b.collect = &cert;

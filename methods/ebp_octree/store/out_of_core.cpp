@@ -357,11 +357,8 @@ void OutOfCore::set_adaptive_certificate(bool on) { path_->set_adaptive(on); }
 // with, and each page offers its triangles with its id).
 DistanceAnswer OutOfCore::certified_distance(const Vec3d& p) {
   TriangleSite site;
-  auto jumped = [&] {
-    return last_page_ != UINT32_MAX && std::max(step_length(p, last_p_), path_->mean_step()) > leaf_cell();
-  };
   const DistanceAnswer r = certified_query(
-      *path_, p, jumped, root_lo_, root_size_, top_counters_, &site,
+      *path_, p, leaf_cell(), root_lo_, root_size_, top_counters_, &site,
       [&] { return work_of(top_counters_) + page_work_; },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
         Best bst;
