@@ -41,12 +41,14 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   // A triangle listed in two of the cells is kept once: an open-addressed set of input indices
   // (at most kNearMax + 1 entries in 2 kNearMax slots: never full).
   constexpr std::uint32_t kSlots = 2 * kNearMax;
+  constexpr int kSlotBits = __builtin_ctz(kSlots);
+  static_assert((kSlots & (kSlots - 1)) == 0, "a power of two: the hash's top bits index the slots");
   std::uint32_t seen[kSlots];
   if (several) std::fill(seen, seen + kSlots, UINT32_MAX);
   auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni) {
     const LeafTri& tr = tris[kk];
     if (several) {
-      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> 24;  // 8 bits: kSlots = 128 ... 256
+      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> (32 - kSlotBits);  // Fibonacci hashing
       for (h %= kSlots; seen[h] != UINT32_MAX; h = (h + 1) % kSlots)
         if (seen[h] == tr.tri()) return;
       seen[h] = tr.tri();

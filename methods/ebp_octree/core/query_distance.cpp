@@ -161,7 +161,7 @@ class Query::DistanceSearch {
 
   /// The near start (after seed_triangle): when the box of the ball (p, best + tol), rounded
   /// outwards to float, lies in the near set's box, every triangle within best of p is a member
-  /// (near_set.hpp), so the members whose boxes meet the ball's box, nearest box first, are the
+  /// (near_set.hpp), so the members whose boxes meet the ball's box, in set order, are the
   /// whole search: no leaf scan, no descent. Returns false (nothing done) otherwise.
   bool near_start(const NearSet& ns) {
     if (!ns.valid || !(B.best < std::numeric_limits<double>::infinity())) return false;
@@ -169,38 +169,25 @@ class Query::DistanceSearch {
     const float f0[3] = {float_down(p.x - r), float_down(p.y - r), float_down(p.z - r)};
     const float f1[3] = {float_up(p.x + r), float_up(p.y + r), float_up(p.z + r)};
     if (!ns.holds(f0, f1)) return false;
-    // Plain members, not std::pair: a pair zero-initialises, and the array was cleared on every
-    // served search (~65 instructions of ~630 on the 1M bunny's contact path).
-    struct Candidate {
-      double first;
-      std::uint32_t second;
-    };
-    Candidate cand[kNearMax];
-    std::uint32_t m = 0;
+    // The seed gave a tight bound (seed_triangle runs first), so the members are taken in set
+    // order, each one whose box is within the running limit tested at once: sorting them by box
+    // distance first cost more than the few extra exact tests it saved. The set lists each input
+    // triangle once, and a served search tests nothing before it but the seed: the members need
+    // no once-per-query stamp, only the seed's exclusion.
+    const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
     ns.for_each_meeting(f0, f1, [&](std::uint32_t j) {
       double d2 = 0;
       for (int a = 0; a < 3; ++a) {
         const double v = std::max({double(ns.blo[a][j]) - p[a], 0.0, p[a] - double(ns.bhi[a][j])});
         d2 += v * v;
       }
-      if (d2 > lim2) return true;
-      std::uint32_t i = m++;  // insertion, ascending (box distance, member): a deterministic order
-      while (i > 0 && cand[i - 1].first > d2) { cand[i] = cand[i - 1]; --i; }
-      cand[i] = {d2, j};
-      return true;
-    });
-    // The set lists each input triangle once, and a served search tests nothing before it but
-    // the seed: the members need no once-per-query stamp (a load and a store in an array over
-    // all triangles, a cache miss on large meshes), only the seed's exclusion.
-    const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
-    for (std::uint32_t i = 0; i < m; ++i) {
-      if (cand[i].first > lim2) break;  // lim2 follows the best down
-      const std::uint32_t j = cand[i].second;
+      if (d2 > lim2) return true;  // lim2 follows the best down
       const LeafTri& t = tris[ns.k[j]];
-      if (t.tri() == seed) continue;
+      if (t.tri() == seed) return true;
       scan_node = ns.node[j];
       evaluate(t, ns.k[j], ns.leaf[j]);
-    }
+      return true;
+    });
     ++counters.near_served;
     counters.near_tested += ns.n;
     return true;
