@@ -64,7 +64,7 @@ LeafGeometry fill_triangle_block(const Vec3d& lo, const Vec3d& hi, const Vec3d& 
       r.normal = encode_face_normal(nn, &normal_err);
       float v[3];
       decode_face_normal(r.normal, v);
-      r.d = float(double(v[0]) * (a.x - cfd.x) + double(v[1]) * (a.y - cfd.y) + double(v[2]) * (a.z - cfd.z));
+      r.d = float(dot(to_d(v), a - cfd));
       g.cands.push_back({nn, 0.5 * len, t});
     }
     if (normal_err > kFaceNormalError) {  // no plane: every side test of this triangle goes exact

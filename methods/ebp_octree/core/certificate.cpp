@@ -350,8 +350,7 @@ double CertifiedPath::mean_step() const {
 bool CertifiedPath::jumped(double leaf_cell) const {
   if (nsteps_ == 0) return false;
   // the last step q - q_prev, measured as step_length(q, q_prev) measures it
-  const Vec3d& m = moves_[(next_ + kStepWindow - 1) % kStepWindow];
-  const double last = std::max({std::fabs(m.x), std::fabs(m.y), std::fabs(m.z)});
+  const double last = max_abs(moves_[(next_ + kStepWindow - 1) % kStepWindow]);
   return std::max(last, mean_step()) > leaf_cell;
 }
 

@@ -58,8 +58,8 @@ inline unsigned low_bits(unsigned m) { return m >= 32 ? ~0u : (1u << m) - 1u; }
 
 #if defined(__SSE2__)
 /// The face-plane values of four records from their last rows, transposed (code, d, tri_flags):
-/// face_plane_value's operations lane-wise. v[3] (optional): the decoded normals.
-inline __m128 face_values_sse2(__m128 code, __m128 d, __m128 fl, const float p[3], __m128* v = nullptr) {
+/// face_plane_value's operations lane-wise.
+inline __m128 face_values_sse2(__m128 code, __m128 d, __m128 fl, const float p[3]) {
   const __m128i c = _mm_castps_si128(code);
   const __m128 S = _mm_set1_ps(kOctScale), SIGN = _mm_set1_ps(-0.0f);
   const __m128 u = _mm_mul_ps(_mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(c, 16), 16)), S);
@@ -71,7 +71,6 @@ inline __m128 face_values_sse2(__m128 code, __m128 d, __m128 fl, const float p[3
       _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, _mm_set1_ps(p[0])), _mm_mul_ps(y, _mm_set1_ps(p[1]))),
                  _mm_mul_ps(z, _mm_set1_ps(p[2]))),
       d);
-  if (v) v[0] = x, v[1] = y, v[2] = z;
   const __m128 no_plane = _mm_castsi128_ps(_mm_srai_epi32(_mm_slli_epi32(_mm_castps_si128(fl), kNoPlaneShift), 31));
   return _mm_andnot_ps(no_plane, val);
 }

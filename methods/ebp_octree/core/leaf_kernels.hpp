@@ -35,14 +35,17 @@ inline double box_d2(const BlockBox& b, const Vec3d& p) {
 }
 
 /// The face-plane value of t at p (in the leaf's frame): ((v0 p0 + v1 p1) + v2 p2) - d in float,
-/// v = t's decoded normal (face_normal.hpp); 0 for a triangle with no plane (kNoPlane). Its sign
-/// is orient3d(a, b, c, p)'s where its magnitude exceeds the leaf's eps. The kernels' plane_pass
-/// gives the same bits.
-inline float face_plane_value(const LeafTri& t, const float p[3]) {
+/// v = t's decoded normal (face_normal.hpp; the first form takes it decoded already); 0 for a
+/// triangle with no plane (kNoPlane). Its sign is orient3d(a, b, c, p)'s where its magnitude
+/// exceeds the leaf's eps. The kernels' plane_pass gives the same bits.
+inline float face_plane_value(const LeafTri& t, const float v[3], const float p[3]) {
   if (t.flags() & kNoPlane) return 0.0f;
+  return ((v[0] * p[0] + v[1] * p[1]) + v[2] * p[2]) - t.d;
+}
+inline float face_plane_value(const LeafTri& t, const float p[3]) {
   float v[3];
   decode_face_normal(t.normal, v);
-  return ((v[0] * p[0] + v[1] * p[1]) + v[2] * p[2]) - t.d;
+  return face_plane_value(t, v, p);
 }
 
 /// |face_plane_value(t, p)| / |v|, |v| = sqrt((v0 v0 + v1 v1) + v2 v2) in float: within the
@@ -51,7 +54,7 @@ inline float face_plane_value(const LeafTri& t, const float p[3]) {
 inline float face_plane_distance(const LeafTri& t, const float p[3]) {
   float v[3];
   decode_face_normal(t.normal, v);
-  return std::fabs(face_plane_value(t, p)) / std::sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
+  return std::fabs(face_plane_value(t, v, p)) / std::sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
 }
 
 /// plane_pass's `ref_sides` for the leaf's own reference point: its sides are the LeafTris'
@@ -96,8 +99,9 @@ struct LeafKernelTable {
   unsigned (*edge_signs)(const Vec3d& p, const Vec3d& q, const float a[3], const float b[3], const float c[3]);
   /// The distance query's pre-filter over blk[0, m), 1 <= m <= 8, before its per-triangle tests
   /// (query_distance.cpp): the bit mask of the triangles it keeps. It clears a triangle when its
-  /// face-plane distance (face_plane_distance, p in the leaf's frame) exceeds plane_lim, or when the squared distance from the box [q_lo, q_hi] (the query point in the
-  /// tree's frame rounded outwards to float) to the triangle's float box, ((0 + g0 g0) + g1 g1)
+  /// face-plane distance (face_plane_distance, p in the leaf's frame) exceeds plane_lim, or when
+  /// the squared distance from the box [q_lo, q_hi] (the query point in the tree's frame rounded
+  /// outwards to float) to the triangle's float box, ((0 + g0 g0) + g1 g1)
   /// + g2 g2 in float, exceeds box_lim. With the limits the caller sets
   /// (distance_prefilter_limits) every triangle cleared is strictly farther than the best they
   /// were set for. Writes the two values of triangle j to plane_abs[j] and box_d2[j] (j < m;

@@ -200,7 +200,6 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
   return true;
 }
 
-
 // A step longer than kNearInsideJump of a leaf cell on some axis is a jump, not a path: the
 // reference path is cheaper than gathering the triangles of up to 8 leaves. The step's near set
 // reaches ahead of p along the step, by kNearInsideAhead steps, with a margin of the larger of
