@@ -52,9 +52,12 @@ void add_queries_command(CLI::App& app) {
       throw InputError("--out " + o->out + ": folder " + dir.string() + " does not exist");
     if (::access(dir.c_str(), W_OK) != 0)
       throw InputError("--out " + o->out + ": folder " + dir.string() + " is not writable");
-    Mesh mesh = load_mesh(o->mesh);
+    // A kind that needs only the box is made from a streamed pass over the mesh file: a mesh of
+    // any size is never held in memory for it.
     nlohmann::json meta;
-    auto pts = generate_queries(mesh, o->kind, o->n, o->seed, given, &meta);
+    const std::vector<Vec3d> pts = kind.generate_in_box
+                                       ? generate_queries(summarize_mesh(o->mesh), o->kind, o->n, o->seed, given, &meta)
+                                       : generate_queries(load_mesh(o->mesh), o->kind, o->n, o->seed, given, &meta);
     try {
       write_query_set(o->out, pts, meta);
     } catch (const std::runtime_error& e) {

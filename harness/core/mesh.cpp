@@ -9,6 +9,8 @@ Box3d Mesh::bounds() const {
   return b;
 }
 
+MeshSummary Mesh::summary() const { return {path, sha256, triangles.size(), vertices.size(), bounds()}; }
+
 double Mesh::average_edge_length() const {
   if (triangles.empty()) return 0.0;
   double sum = 0.0;

@@ -30,6 +30,17 @@ struct MeshFileInfo {
 
 using Triangle = std::array<std::uint32_t, 3>;
 
+/// What a job records about its mesh, without the geometry: made from a loaded Mesh
+/// (Mesh::summary) or by one streamed pass over the file (mesh_io.hpp: summarize_mesh), so that
+/// a method that reads its structure from a file (a store) and a query kind that needs only the
+/// box run without the mesh in memory (a 128M-triangle model is 3 GB of it).
+struct MeshSummary {
+  std::string path;    ///< file it was read from
+  std::string sha256;  ///< hex sha256 of the file's bytes
+  std::uint64_t triangles = 0, vertices = 0;
+  Box3d bounds;  ///< box of the vertices referenced or not (Mesh::bounds)
+};
+
 struct Mesh {
   std::string path;                                ///< file it was read from ("" if made in code)
   std::string sha256;                              ///< hex sha256 of the file's bytes
@@ -40,6 +51,7 @@ struct Mesh {
   std::size_t num_triangles() const { return triangles.size(); }
   Vec3d vertex(std::uint32_t tri, int corner) const { return vertices[triangles[tri][corner]]; }
   Box3d bounds() const;                            ///< box of the vertices referenced or not
+  MeshSummary summary() const;
   double average_edge_length() const;              ///< mean over the 3 edges of every triangle
   std::size_t bytes() const {
     return vertices.size() * sizeof(Vec3d) + triangles.size() * sizeof(triangles[0]);

@@ -30,6 +30,7 @@
 namespace bvhbench {
 
 struct Mesh;
+struct MeshSummary;
 class Progress;
 
 enum class QueryType { inside, distance };
@@ -111,6 +112,15 @@ class Method : public QueryState {
   /// Builds the structure. May throw InputError (input it refuses), UnsupportedError, or
   /// anything else (becomes status `error`).
   virtual void build(const Mesh& mesh, const BuildContext& ctx) = 0;
+
+  /// Whether the structure is read from a file (a prebuilt store) and needs the mesh's summary
+  /// alone: a job then calls open() with a summary made by a streamed pass over the mesh file,
+  /// never loading the mesh (a 128M-triangle model is 3 GB in memory), in place of build().
+  /// Default: false.
+  virtual bool reads_structure() const { return false; }
+  /// For a method that reads_structure(): opens the structure, checking that it was made from
+  /// `mesh` (its triangle count, its file's sha256). The default throws std::logic_error.
+  virtual void open(const MeshSummary& mesh, const BuildContext& ctx);
 
   /// Whether this instance, with its options, answers q, where that is narrower than what the
   /// method registered (MethodInfo::caps, where capabilities are said): a Python method asks its

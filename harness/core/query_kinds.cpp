@@ -14,9 +14,8 @@ namespace query_kinds_detail {
 
 /// Uniform points in the mesh's bounding box enlarged by `margin` (fraction of the extent,
 /// default 10%) on each side.
-std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed,
-                                 const Params& params) {
-  Box3d b = mesh.bounds();
+std::vector<Vec3d> random_points_in_box(const Box3d& box, std::size_t n, std::uint64_t seed, const Params& params) {
+  Box3d b = box;
   const double margin = params.get_real("margin");
   Vec3d ext = b.extent();
   // A flat or point-like mesh still gets a box with volume.
@@ -33,6 +32,10 @@ std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t 
     p.z = rng.uniform(lo.z, hi.z);
   }
   return pts;
+}
+
+std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+  return random_points_in_box(mesh.bounds(), n, seed, params);
 }
 
 }  // namespace query_kinds_detail
@@ -82,28 +85,28 @@ const std::vector<QueryKind>& query_kinds() {
   static const std::vector<QueryKind> kinds = {
       {"random", "uniform in the bounding box enlarged by `margin` of its extent on each side",
        {real("margin", "0.1", "the box's enlargement on each side, as a fraction of its extent")},
-       d::random_points, false},
+       d::random_points, false, d::random_points_in_box},
       {"near",
        "area-weighted surface samples moved along the face normal by a Gaussian offset of "
        "standard deviation `sigma` times the bounding-box diagonal",
        {real("sigma", "0.01", "the offset's standard deviation, as a fraction of the bounding-box diagonal", 0)},
-       d::near_points, false},
+       d::near_points, false, nullptr},
       {"haptic",
        "a simulated 1 kHz haptic probe: contact episodes that come in from free space, slide "
        "on the surface inside a contact band (+-band_mm) and leave; speeds in m/s with the "
        "bounding-box diagonal taken as model_size_m metres; replayed in order",
-       probe_params(true), d::haptic_path, true},
+       probe_params(true), d::haptic_path, true, nullptr},
       {"contact",
        "the haptic probe's contact phases alone (no approach or leave): every sample slides "
        "inside the contact band (+-band_mm) of the surface, the near-touching regime of a "
        "haptic loop; episodes of contact_ms start on new surface points; replayed in order",
-       probe_params(false), d::contact_path, true},
+       probe_params(false), d::contact_path, true, nullptr},
       {"surface",
        "points exactly on the mesh: on vertices (share vertex_share), on edges (edge_share) "
        "and inside faces (the rest, area-weighted)",
        {real("vertex_share", "0.3333333333333333", "the share of points on vertices", 0, false, 1),
         real("edge_share", "0.3333333333333333", "the share of points on edges", 0, false, 1)},
-       d::surface_points, false},
+       d::surface_points, false, nullptr},
   };
   return kinds;
 }

@@ -12,6 +12,7 @@
 
 namespace bvhbench::query_kinds_detail {
 
+std::vector<Vec3d> random_points_in_box(const Box3d& box, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);

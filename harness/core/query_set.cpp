@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "harness/core/mesh.hpp"
 #include "harness/util/errors.hpp"
@@ -53,26 +54,45 @@ const QueryKind& query_kind(const std::string& name) {
                    "known: " + known + ")");
 }
 
+namespace {
+
+/// The sidecar of a generated set (query_set_io.hpp writes it beside the points).
+nlohmann::json sidecar(const MeshSummary& mesh, const QueryKind& k, std::size_t n, std::uint64_t seed,
+                       const Params& params) {
+  nlohmann::json m;
+  m["kind"] = k.name;
+  m["n"] = n;
+  m["seed"] = seed;
+  m["mesh_sha256"] = mesh.sha256;
+  m["mesh_path"] = mesh.path;
+  m["mesh_triangles"] = mesh.triangles;
+  m["ordered"] = k.ordered;
+  m["params"] = query_param_values(k, params);
+  m["created_by"] = "bvhbench queries";
+  return m;
+}
+
+}  // namespace
+
 std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,
                                     nlohmann::json* meta) {
-  const QueryKind* k = &query_kind(kind);
-  const Params params = query_kind_params(*k, given_params);
-  auto pts = k->generate(mesh, n, seed, params);
-  if (meta) {
-    nlohmann::json m;
-    m["kind"] = kind;
-    m["n"] = pts.size();
-    m["seed"] = seed;
-    m["mesh_sha256"] = mesh.sha256;
-    m["mesh_path"] = mesh.path;
-    m["mesh_triangles"] = mesh.num_triangles();
-    m["ordered"] = k->ordered;
-    m["params"] = query_param_values(*k, params);
-    m["created_by"] = "bvhbench queries";
-    *meta = m;
-  }
+  const QueryKind& k = query_kind(kind);
+  const Params params = query_kind_params(k, given_params);
+  auto pts = k.generate(mesh, n, seed, params);
+  if (meta) *meta = sidecar(mesh.summary(), k, pts.size(), seed, params);
+  return pts;
+}
+
+std::vector<Vec3d> generate_queries(const MeshSummary& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed, const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta) {
+  const QueryKind& k = query_kind(kind);
+  if (!k.generate_in_box) throw std::logic_error("query kind '" + kind + "' needs the mesh, not its summary");
+  const Params params = query_kind_params(k, given_params);
+  auto pts = k.generate_in_box(mesh.bounds, n, seed, params);
+  if (meta) *meta = sidecar(mesh, k, pts.size(), seed, params);
   return pts;
 }
 

@@ -21,6 +21,7 @@
 namespace bvhbench {
 
 struct Mesh;
+struct MeshSummary;
 
 struct QuerySet {
   std::string path;         ///< the .npy, .xyz or .csv
@@ -42,6 +43,11 @@ struct QueryKind {
   std::function<std::vector<Vec3d>(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params)>
       generate;
   bool ordered = false;  ///< a path whose order matters (haptic)
+  /// For a kind that needs only the mesh's box (random): its generator from the box, which
+  /// `generate` is on mesh.bounds(), so that its sets are made from the mesh file's streamed
+  /// summary without loading the mesh (generate_queries on a MeshSummary). Null otherwise.
+  std::function<std::vector<Vec3d>(const Box3d& box, std::size_t n, std::uint64_t seed, const Params& params)>
+      generate_in_box;
 };
 
 const std::vector<QueryKind>& query_kinds();
@@ -81,6 +87,11 @@ const QueryKind& query_kind(const std::string& name);
 std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta);
+/// The same from the mesh's summary, for a kind with generate_in_box (the same points and
+/// sidecar as from the mesh); std::logic_error for another kind.
+std::vector<Vec3d> generate_queries(const MeshSummary& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed, const std::map<std::string, double>& given_params,
                                     nlohmann::json* meta);
 
 }  // namespace bvhbench

@@ -25,6 +25,10 @@ void Method::set_query_options(const Params&) {
   throw std::logic_error("set_query_options on a method that does not declare query_options_after_build");
 }
 
+void Method::open(const MeshSummary&, const BuildContext&) {
+  throw std::logic_error("open on a method that does not read its structure from a file");
+}
+
 std::string structure_key(const MethodSpec& spec) {
   if (!spec.resolved()) return std::string();
   if (!spec.info->caps.query_options_after_build) return spec.params_key();

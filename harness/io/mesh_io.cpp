@@ -42,6 +42,20 @@ Mesh load_mesh(const std::string& path, Progress* progress) {
   return read_mesh(*reader);
 }
 
+MeshSummary summarize_mesh(const std::string& path, Progress* progress) {
+  auto reader = MeshReader::open(path, progress);
+  MeshSummary s;
+  s.path = reader->name();
+  reader->read_vertices([&](std::uint64_t, const Vec3d* v, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) s.bounds.add(v[i]);
+  });
+  reader->read_triangles([](std::uint64_t, const Triangle*, std::size_t) {});  // checks them, completes the hash
+  s.vertices = reader->num_vertices();
+  s.triangles = reader->num_triangles();
+  s.sha256 = reader->sha256();
+  return s;
+}
+
 Mesh load_mesh_bytes(std::string_view data, const std::string& name, const std::string& format) {
   auto reader = MeshReader::open_bytes(data, name, format);
   return read_mesh(*reader);

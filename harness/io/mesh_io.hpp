@@ -25,6 +25,10 @@ Mesh load_mesh(const std::string& path, Progress* progress = nullptr);
 /// extension to take it from, or "" to sniff the content (an unknown format is an InputError).
 Mesh load_mesh_bytes(std::string_view data, const std::string& name, const std::string& format = "");
 
+/// The mesh's summary from one streamed pass over the file (the same checks and messages as
+/// load_mesh; equal to load_mesh(path).summary()), holding only the reader's buffers.
+MeshSummary summarize_mesh(const std::string& path, Progress* progress = nullptr);
+
 /// Reads every vertex and triangle of `reader` into a Mesh (path = the reader's name).
 Mesh read_mesh(MeshReader& reader);
 

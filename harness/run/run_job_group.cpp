@@ -1,5 +1,6 @@
 // Jobs that share one structure, in one process (run_job.hpp: run_job_group): each job's query
-// set read and checked, the mesh loaded and the method built once, then each job's queries by the
+// set read and checked, the mesh loaded and the method built once (or, for a structure read from a
+// file, the mesh file's streamed summary and the structure opened), then each job's queries by the
 // protocol of query_protocol.hpp, its result assembled as docs/results.md says.
 #include <malloc.h>
 
@@ -158,12 +159,26 @@ class GroupRun {
       create_method();
       for (std::size_t k = 0; k < jobs_.size(); ++k) guarded(k, [&] { read_queries(jobs_[k]); });
       if (runnable() == 0) return;
-      Mesh mesh = load_mesh();
-      for (std::size_t k = 0; k < jobs_.size(); ++k) guarded(k, [&] { describe_mesh(jobs_[k], mesh); });
-      if (runnable() == 0) return;
-      build(mesh);
-      { Mesh released = std::move(mesh); }  // the method keeps what it needs: query memory is its own
-      malloc_trim(0);
+      if (method_->reads_structure() && !needs_probe_paths()) {
+        // A structure read from a file: the mesh's summary from a streamed pass, never the mesh.
+        summarize(summarize_mesh_file());
+        for (std::size_t k = 0; k < jobs_.size(); ++k) guarded(k, [&] { describe_mesh(jobs_[k]); });
+        if (runnable() == 0) return;
+        build([&](const BuildContext& ctx) { method_->open(summary_, ctx); });
+      } else {
+        Mesh mesh = load_mesh();
+        summarize(mesh.summary());
+        mesh_bytes_ = mesh.bytes();
+        for (std::size_t k = 0; k < jobs_.size(); ++k)
+          guarded(k, [&] {
+            describe_mesh(jobs_[k]);
+            make_probe_paths(jobs_[k], mesh);
+          });
+        if (runnable() == 0) return;
+        build([&](const BuildContext& ctx) { method_->build(mesh, ctx); });
+        { Mesh released = std::move(mesh); }  // the method keeps what it needs: query memory is its own
+        malloc_trim(0);
+      }
     } catch (...) {
       const Failure f = current_failure();
       for (std::size_t k = 0; k < jobs_.size(); ++k) fail(k, f.code, f.message);
@@ -259,35 +274,53 @@ class GroupRun {
     if (spec.threads > 1 && !info_->caps.concurrent_queries)
       throw UnsupportedError(info_->name + " does not declare concurrent queries: threads must be 1 (asked " +
                              std::to_string(spec.threads) + ")");
+    j.probes = spec.threads > 1 && replays_as_probes(j.qs);
   }
 
   Mesh load_mesh() {
     Progress load_progress("loading " + first().mesh_path, 1.0, first().progress);
-    Mesh mesh = load_mesh_file();
+    Mesh mesh = bvhbench::load_mesh(first().mesh_path, nullptr);
     load_progress.finish();
-    diagonal_ = mesh.bounds().diagonal();
-    mesh_sha256_ = mesh.sha256;  // the mesh itself is released after build
-    mesh_bytes_ = mesh.bytes();
-    mesh_block_ = {{"path", printable(mesh.path)},
-                   {"sha256", mesh.sha256},
-                   {"triangles", mesh.num_triangles()},
-                   {"vertices", mesh.vertices.size()},
-                   {"diagonal", diagonal_}};
-    // How the mesh was made, where its dataset's manifest says (a stress case, a real model, ...).
-    if (json d = dataset_entry(mesh.path, mesh.sha256); !d.is_null()) mesh_block_["dataset"] = d;
     return mesh;
   }
-  Mesh load_mesh_file() const { return bvhbench::load_mesh(first().mesh_path, nullptr); }
 
-  /// The mesh in the job's result, and the threads' queries: T probes of a generated path (made
-  /// on the mesh before the build), or the set split in T parts.
-  void describe_mesh(GroupJob& j, const Mesh& mesh) {
+  MeshSummary summarize_mesh_file() {
+    Progress read_progress("reading " + first().mesh_path, 1.0, first().progress);
+    MeshSummary s = bvhbench::summarize_mesh(first().mesh_path, nullptr);
+    read_progress.finish();
+    return s;
+  }
+
+  /// The mesh as every job's result records it.
+  void summarize(MeshSummary s) {
+    summary_ = std::move(s);
+    diagonal_ = summary_.bounds.diagonal();
+    mesh_block_ = {{"path", printable(summary_.path)},
+                   {"sha256", summary_.sha256},
+                   {"triangles", summary_.triangles},
+                   {"vertices", summary_.vertices},
+                   {"diagonal", diagonal_}};
+    // How the mesh was made, where its dataset's manifest says (a stress case, a real model, ...).
+    if (json d = dataset_entry(summary_.path, summary_.sha256); !d.is_null()) mesh_block_["dataset"] = d;
+  }
+
+  /// Whether some job replays its path as T probes, whose other paths are made on the mesh.
+  bool needs_probe_paths() const {
+    return std::any_of(jobs_.begin(), jobs_.end(), [](const GroupJob& j) { return !j.done && j.probes; });
+  }
+
+  /// The mesh in the job's result.
+  void describe_mesh(GroupJob& j) {
     j.r["job"]["mesh"] = mesh_block_;
-    if (j.qs.meta.contains("mesh_sha256") && j.qs.meta["mesh_sha256"] != mesh.sha256)
+    if (j.qs.meta.contains("mesh_sha256") && j.qs.meta["mesh_sha256"] != summary_.sha256)
       j.r["job"]["queries"]["mesh_mismatch"] = true;
-    const int threads = j.spec->threads;
-    j.probes = threads > 1 && replays_as_probes(j.qs);
+  }
+
+  /// The threads' queries of a job that replays as probes: T probes of a generated path (made on
+  /// the mesh before the build); otherwise the set is split in T parts.
+  void make_probe_paths(GroupJob& j, const Mesh& mesh) {
     if (!j.probes) return;
+    const int threads = j.spec->threads;
     Progress probe_progress("making " + std::to_string(threads - 1) + " more probe paths", 1.0, j.spec->progress);
     j.probe_points = probe_paths(mesh, j.qs, threads);
     probe_progress.finish();
@@ -307,11 +340,13 @@ class GroupRun {
     return ctx;
   }
 
-  void build(const Mesh& mesh) {
+  /// The method's build (or its structure's opening), timed, with its peak memory.
+  template <class Build>
+  void build(Build&& build_with) {
     const BuildContext ctx = build_context();
     reset_peak_rss();
     const auto b0 = Clock::now();
-    method_->build(mesh, ctx);
+    build_with(ctx);
     const auto b1 = Clock::now();
     build_peak_ = peak_rss_bytes();
     structure_bytes_ = method_->structure_bytes();
@@ -381,7 +416,7 @@ class GroupRun {
                      {"mesh_bytes", mesh_bytes_}};
     if (!spec.answers_path.empty()) answers.write_npz(spec.answers_path);
     if (!spec.truth_path.empty()) {
-      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, mesh_sha256_, j.inside,
+      j.r["accuracy"] = compute_accuracy(answers, spec.truth_path, diagonal_, j.qs.sha256, summary_.sha256, j.inside,
                                          j.qs.points);
       // Where the method is fast and where slow: the query set's latencies by the oracle's
       // distance to the surface (none in batches: no query has a latency of its own).
@@ -407,8 +442,9 @@ class GroupRun {
   std::string applied_options_;  ///< the configuration the method asks as now (params_key)
   std::unique_ptr<Method> method_;
   double diagonal_ = 0;
-  std::string mesh_sha256_;
-  std::size_t mesh_bytes_ = 0, build_peak_ = 0, structure_bytes_ = 0, queried_ = 0;
+  MeshSummary summary_;
+  std::size_t mesh_bytes_ = 0,  // the harness's copy of the mesh (0: not loaded)
+              build_peak_ = 0, structure_bytes_ = 0, queried_ = 0;
   json mesh_block_, build_, structure_;
   std::map<std::string, std::string> read_options_;
 };

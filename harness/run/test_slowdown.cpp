@@ -63,9 +63,13 @@ class SlowedMethod final : public SlowedQueries<Method>, public BatchAnswers {
       : SlowedQueries<Method>(*inner, units), inner_(std::move(inner)), knob_(std::move(knob)) {}
 
   void build(const Mesh& mesh, const BuildContext& ctx) override {
-    std::cerr << "bvhbench: TEST KNOB BVHBENCH_TEST_SLOWDOWN=" << knob_ << " is set: every query of this "
-              << "method runs " << units_ << " rounds of extra work. These timings are NOT the method's.\n";
+    warn();
     inner_->build(mesh, ctx);
+  }
+  bool reads_structure() const override { return inner_->reads_structure(); }
+  void open(const MeshSummary& mesh, const BuildContext& ctx) override {
+    warn();
+    inner_->open(mesh, ctx);
   }
   bool supports(QueryType q) const override { return inner_->supports(q); }
   void set_query_options(const Params& params) override { inner_->set_query_options(params); }
@@ -95,6 +99,10 @@ class SlowedMethod final : public SlowedQueries<Method>, public BatchAnswers {
   nlohmann::json machine_facts() const override { return inner_->machine_facts(); }
 
  private:
+  void warn() const {
+    std::cerr << "bvhbench: TEST KNOB BVHBENCH_TEST_SLOWDOWN=" << knob_ << " is set: every query of this "
+              << "method runs " << units_ << " rounds of extra work. These timings are NOT the method's.\n";
+  }
   std::unique_ptr<Method> inner_;
   std::string knob_;
 };

@@ -70,13 +70,15 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
         adaptive_(p.get("certificate_policy") == "auto"),
         chained_sign_(p.get_bool("chained_sign")) {}
 
-  void build(const Mesh& mesh, const BuildContext& ctx) override {
+  void build(const Mesh& mesh, const BuildContext& ctx) override { open(mesh.summary(), ctx); }
+  bool reads_structure() const override { return true; }
+  void open(const MeshSummary& mesh, const BuildContext& ctx) override {
     thread_cache_bytes_ = cache_bytes_ / std::size_t(std::max(1, ctx.threads));
     store_ = std::make_shared<const ebp::StoreReader>(path_);
     const ebp::FileHeader& h = store_->header();
-    if (!mesh.triangles.empty() && h.num_triangles != mesh.num_triangles())
+    if (h.num_triangles != mesh.triangles)
       throw file_error(path_, "built for a mesh of " + std::to_string(h.num_triangles) + " triangles, " + mesh.path +
-                                  " has " + std::to_string(mesh.num_triangles()));
+                                  " has " + std::to_string(mesh.triangles));
     const auto info = nlohmann::json::parse(store_->info_json(), nullptr, false);
     if (info.is_object() && info.contains("mesh_sha256") && info["mesh_sha256"].is_string() && !mesh.sha256.empty() &&
         info["mesh_sha256"].get<std::string>() != mesh.sha256)

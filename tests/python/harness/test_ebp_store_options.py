@@ -92,3 +92,39 @@ def test_reals_written_two_ways_are_one_key(store):
     keys = {job(store, f"ebp_octree:leaf_factor={v}")[1]["job"]["params_key"] for v in ("8", "8.0", "8.00", "8e0")}
     assert keys == {"leaf_factor=8"}
     assert job(store, "ebp_octree:leaf_factor=5.0")[1]["job"]["params_key"] == ""
+
+
+def test_a_store_job_reads_the_mesh_file_without_loading_the_mesh(store):
+    """A structure read from a file needs the mesh's summary alone: the job makes it in one
+    streamed pass (memory.mesh_bytes 0, the harness held no copy), and records the very mesh
+    block an in-memory job records, read from the loaded mesh."""
+    _, ooc = job(store, f"ebp_octree:store={store / 'cow.ebp'}")
+    _, mem = job(store, "ebp_octree")
+    assert ooc["status"] == "ok" and mem["status"] == "ok"
+    assert ooc["job"]["mesh"] == mem["job"]["mesh"]
+    assert ooc["job"]["mesh"]["triangles"] == 5804 and ooc["job"]["mesh"]["vertices"] == 2903
+    assert ooc["memory"]["mesh_bytes"] == 0
+    assert mem["memory"]["mesh_bytes"] == 2903 * 24 + 5804 * 12
+
+
+def test_a_store_job_whose_probes_need_the_mesh_loads_it(store):
+    """T probes of a generated path: the others' paths are made on the mesh, so it is loaded."""
+    run("queries", "--mesh", MESH, "--kind", "haptic", "--n", 300, "--seed", 1, "--out", store / "h.npy", check=0)
+    out = store / "rh.json"
+    run("run", "--mesh", MESH, "--method", f"ebp_octree:store={store / 'cow.ebp'},coherent=true",
+        "--queries", store / "h.npy", "--query", "distance", "--repeat", 1, "--threads", 2, "--out", out, check=0)
+    r = json.loads(out.read_text())
+    assert r["status"] == "ok", r["message"]
+    assert r["queries"]["threads"]["mode"] == "probes"
+    assert r["memory"]["mesh_bytes"] == 2903 * 24 + 5804 * 12
+
+
+def test_a_store_of_another_mesh_is_refused_from_the_summary(store, tmp_path):
+    """The store's triangle count and mesh hash are checked against the streamed summary."""
+    other = tmp_path / "other.obj"
+    other.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    run("queries", "--mesh", other, "--kind", "random", "--n", 10, "--seed", 1, "--out", tmp_path / "q.npy", check=0)
+    out = tmp_path / "r.json"
+    p = run("run", "--mesh", other, "--method", f"ebp_octree:store={store / 'cow.ebp'}", "--queries",
+            tmp_path / "q.npy", "--query", "inside", "--repeat", 1, "--out", out, check=2)
+    assert "built for a mesh of 5804 triangles" in p.stderr and str(other) in p.stderr

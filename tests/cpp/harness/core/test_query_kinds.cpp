@@ -119,6 +119,32 @@ TEST(QueryKinds, RandomStaysInTheBoxEnlargedByTenPercent) {
   EXPECT_NEAR(double(outside_box) / pts.size(), 1 - std::pow(2 / 2.4, 3), 0.02);
 }
 
+// A kind that needs only the box is made from the mesh's summary (a streamed pass: `bvhbench
+// queries` never loads the mesh for it) with the same bytes and sidecar as from the mesh; every
+// other kind needs the mesh, and says so.
+TEST(QueryKinds, BoxKindsFromTheSummaryAreTheSameBytesAsFromTheMesh) {
+  const std::string path = std::string(BVHBENCH_SHARED_DIR) + "/meshes/rocker-arm.obj";
+  const Mesh m = load_mesh(path);
+  const MeshSummary s = summarize_mesh(path);
+  int box_kinds = 0;
+  for (const QueryKind& k : query_kinds()) {
+    SCOPED_TRACE(k.name);
+    if (!k.generate_in_box) {
+      EXPECT_THROW(generate_queries(s, k.name, 10, 1, {}, nullptr), std::logic_error);
+      continue;
+    }
+    ++box_kinds;
+    nlohmann::json from_mesh, from_summary;
+    const auto a = generate_queries(m, k.name, 5000, 3, {{"margin", 0.25}}, &from_mesh);
+    const auto b = generate_queries(s, k.name, 5000, 3, {{"margin", 0.25}}, &from_summary);
+    EXPECT_TRUE(same_bytes(a, b));
+    EXPECT_EQ(from_mesh, from_summary);
+    EXPECT_EQ(from_summary["mesh_triangles"], m.num_triangles());
+  }
+  EXPECT_EQ(box_kinds, 1);  // random
+  EXPECT_TRUE(find_query_kind("random")->generate_in_box);
+}
+
 TEST(QueryKinds, NearOffsetsAreGaussianWithSigmaOfTheDiagonal) {
   const Mesh m = square();  // the offset along the normal is z
   const std::size_t n = 40000;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -568,6 +569,61 @@ TEST(MeshIo, RealMeshesLoad) {
     EXPECT_EQ(m.triangles.size(), mm.triangles);
     EXPECT_EQ(m.sha256, sha256_file(path));
     EXPECT_GT(m.average_edge_length(), 0.0);
+  }
+}
+
+// ---- the streamed summary ----
+
+/// The same facts whichever way they were read: the mesh loaded whole, or one streamed pass.
+void expect_same_summary(const MeshSummary& a, const MeshSummary& b) {
+  EXPECT_EQ(a.path, b.path);
+  EXPECT_EQ(a.sha256, b.sha256);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.bounds.lo, b.bounds.lo);
+  EXPECT_EQ(a.bounds.hi, b.bounds.hi);
+}
+
+// Every fixture, good or malformed, in every format: the summary of a streamed pass is the loaded
+// mesh's, and a file load_mesh refuses is refused with the same message.
+TEST(MeshSummary, StreamedPassMatchesTheLoadedMeshOnEveryFixture) {
+  int good = 0, bad = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(BVHBENCH_FIXTURES_DIR) + "/meshes")) {
+    if (!entry.is_regular_file()) continue;
+    const std::string path = entry.path().string();
+    SCOPED_TRACE(path);
+    std::string load_error;
+    Mesh m;
+    try {
+      m = load_mesh(path);
+    } catch (const InputError& e) {
+      load_error = e.what();
+    }
+    if (load_error.empty()) {
+      expect_same_summary(summarize_mesh(path), m.summary());
+      EXPECT_EQ(m.summary().triangles, m.num_triangles());
+      ++good;
+    } else {
+      try {
+        summarize_mesh(path);
+        ADD_FAILURE() << "summarize_mesh accepted what load_mesh refused: " << load_error;
+      } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), load_error);
+      }
+      ++bad;
+    }
+  }
+  EXPECT_GT(good, 10);
+  EXPECT_GT(bad, 30);
+}
+
+TEST(MeshSummary, RealMeshes) {
+  for (const char* name : {"stanford-bunny.obj", "rocker-arm.obj"}) {
+    const std::string path = std::string(BVHBENCH_SHARED_DIR) + "/meshes/" + name;
+    SCOPED_TRACE(path);
+    const MeshSummary s = summarize_mesh(path);
+    expect_same_summary(s, load_mesh(path).summary());
+    EXPECT_EQ(s.sha256, sha256_file(path));
   }
 }
 
