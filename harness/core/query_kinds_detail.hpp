@@ -19,17 +19,23 @@ std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t
 std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 std::vector<Vec3d> contact_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& p);
 
-/// Area-weighted triangle picking: a prefix sum of triangle areas (#F doubles), searched by
-/// bisection. Zero-area triangles are never picked.
+/// Area-weighted triangle picking: the first triangle whose running sum of areas (in triangle
+/// order) exceeds u times the total. The running sum is kept at the end of every chunk of
+/// kChunk triangles only (8 bytes per chunk, not per triangle: 4 MB at 128M triangles); a pick
+/// adds up its chunk's areas again, in the same order, so it is the same double sum and the same
+/// triangle as over a full prefix-sum array. Zero-area triangles are never picked. The mesh must
+/// outlive the sampler.
 class AreaSampler {
  public:
+  static constexpr std::size_t kChunk = 256;
   /// Throws InputError if the mesh has no area at all.
   explicit AreaSampler(const Mesh& mesh);
   /// A triangle with probability proportional to its area, from u in [0, 1).
   std::uint32_t pick(double u) const;
-  double total_area() const { return cdf_.empty() ? 0.0 : cdf_.back(); }
+  double total_area() const { return chunk_end_.empty() ? 0.0 : chunk_end_.back(); }
  private:
-  std::vector<double> cdf_;
+  const Mesh& mesh_;
+  std::vector<double> chunk_end_;  ///< the running sum at the end of each chunk
 };
 
 /// A point uniform on triangle (a, b, c) from two uniforms in [0, 1).

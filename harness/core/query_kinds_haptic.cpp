@@ -76,39 +76,27 @@ TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_ce
     if (cells <= max_cells) break;
     h_ *= 1.25;
   }
-  // Cell coordinates of every vertex once (a sequential pass), so that the two passes over the
-  // triangles gather 12 bytes per corner and most triangles (smaller than a cell) take the
-  // single-cell path, remembered between the passes.
-  const std::size_t nv = mesh.vertices.size();
-  std::vector<std::array<int, 3>> vcell(nv);
-  for (std::size_t v = 0; v < nv; ++v)
-    for (int i = 0; i < 3; ++i) vcell[v][i] = cell_coord(mesh.vertices[v][i], i);
+  // Two passes over the triangles (count, then fill), each working out a triangle's cells from
+  // its corners again: nothing per vertex or per triangle is kept between them, so the grid's
+  // build holds its offsets and ids alone (at 128M triangles, per-vertex cells and per-triangle
+  // single cells kept 1.3 GB more).
   auto cell_range = [&](std::uint32_t t, int lo[3], int hi[3]) {
     const auto& tri = mesh.triangles[t];
-    const auto &a = vcell[tri[0]], &b = vcell[tri[1]], &c = vcell[tri[2]];
     for (int i = 0; i < 3; ++i) {
-      lo[i] = std::min({a[i], b[i], c[i]});
-      hi[i] = std::max({a[i], b[i], c[i]});
+      const int a = cell_coord(mesh.vertices[tri[0]][i], i), b = cell_coord(mesh.vertices[tri[1]][i], i),
+                c = cell_coord(mesh.vertices[tri[2]][i], i);
+      lo[i] = std::min({a, b, c});
+      hi[i] = std::max({a, b, c});
     }
   };
   auto linear = [&](int x, int y, int z) { return (std::size_t(z) * n_[1] + y) * n_[0] + x; };
-  constexpr std::uint32_t kMulti = ~std::uint32_t(0);
   const std::size_t cells = num_cells();
   offsets_.assign(cells + 1, 0);
   const auto nt = std::uint32_t(mesh.num_triangles());
-  std::vector<std::uint32_t> single(nt);
   std::uint64_t refs = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
     int lo[3], hi[3];
     cell_range(t, lo, hi);
-    if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {
-      const std::size_t c = linear(lo[0], lo[1], lo[2]);
-      single[t] = std::uint32_t(c);
-      ++offsets_[c];
-      ++refs;
-      continue;
-    }
-    single[t] = kMulti;
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) ++offsets_[linear(x, y, z)];
@@ -122,10 +110,6 @@ TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_ce
   offsets_[cells] = sum;
   ids_.resize(sum);
   for (std::uint32_t t = nt; t-- > 0;) {
-    if (single[t] != kMulti) {
-      ids_[--offsets_[single[t]]] = t;
-      continue;
-    }
     int lo[3], hi[3];
     cell_range(t, lo, hi);
     for (int z = lo[2]; z <= hi[2]; ++z)

@@ -13,26 +13,51 @@
 
 namespace bvhbench::query_kinds_detail {
 
-AreaSampler::AreaSampler(const Mesh& mesh) {
-  cdf_.resize(mesh.num_triangles());
-  double sum = 0;
-  for (std::size_t t = 0; t < cdf_.size(); ++t) {
+namespace {
+
+/// The running sum of triangle areas over triangles [t0, t1) from `sum`, calling
+/// at(t, sum) after each triangle until it returns true; returns the sum. The sampler's pass over
+/// the whole mesh and a pick's pass over one chunk both add through here, one triangle at a time
+/// in triangle order, so a chunk's running sums are the same doubles both times.
+template <class At>
+double add_areas(const Mesh& mesh, std::size_t t0, std::size_t t1, double sum, At&& at) {
+  for (std::size_t t = t0; t < t1; ++t) {
     const Vec3d a = mesh.vertex(std::uint32_t(t), 0), b = mesh.vertex(std::uint32_t(t), 1),
                 c = mesh.vertex(std::uint32_t(t), 2);
     sum += 0.5 * norm(cross(b - a, c - a));
-    cdf_[t] = sum;
+    if (at(t, sum)) break;
   }
+  return sum;
+}
+
+}  // namespace
+
+AreaSampler::AreaSampler(const Mesh& mesh) : mesh_(mesh) {
+  const std::size_t nt = mesh.num_triangles();
+  chunk_end_.reserve((nt + kChunk - 1) / kChunk);
+  double sum = 0;
+  for (std::size_t t0 = 0; t0 < nt; t0 += kChunk)
+    chunk_end_.push_back(sum = add_areas(mesh, t0, std::min(nt, t0 + kChunk), sum, [](std::size_t, double) { return false; }));
   if (!(sum > 0) || !std::isfinite(sum))
     throw InputError(mesh.path + ": the mesh has no surface area to sample");
 }
 
 std::uint32_t AreaSampler::pick(double u) const {
-  const double x = u * cdf_.back();
-  // First triangle whose cumulative area exceeds x: zero-area triangles (equal cdf to their
-  // predecessor) can never be the first to exceed it.
-  auto it = std::upper_bound(cdf_.begin(), cdf_.end(), x);
-  if (it == cdf_.end()) --it;
-  return std::uint32_t(it - cdf_.begin());
+  const double x = u * chunk_end_.back();
+  // The first chunk whose running sum exceeds x holds the first triangle whose running sum
+  // does (the sums never decrease); none: the last triangle. Zero-area triangles (the same sum
+  // as their predecessor) can never be the first to exceed it.
+  const auto it = std::upper_bound(chunk_end_.begin(), chunk_end_.end(), x);
+  if (it == chunk_end_.end()) return std::uint32_t(mesh_.num_triangles() - 1);
+  const std::size_t c = std::size_t(it - chunk_end_.begin());
+  const std::size_t t0 = c * kChunk, t1 = std::min(mesh_.num_triangles(), t0 + kChunk);
+  std::size_t found = t1 - 1;
+  add_areas(mesh_, t0, t1, c > 0 ? chunk_end_[c - 1] : 0.0, [&](std::size_t t, double sum) {
+    if (!(sum > x)) return false;
+    found = t;
+    return true;
+  });
+  return std::uint32_t(found);
 }
 
 Vec3d uniform_in_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c, double r1, double r2) {

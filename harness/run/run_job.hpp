@@ -65,8 +65,10 @@ struct GroupHooks {
 /// Runs jobs that share one structure, in this process: the same mesh, method spec and threads
 /// (and repeat, deadline); their query sets, query types, oracles and answers files may differ.
 /// Each job's query set is read and checked first (a job that cannot run is finished at once:
-/// rejected_input, unsupported); then the mesh is loaded and the method built once, with the
-/// build context of the first job that runs (a method whose build reads the queries is never
+/// rejected_input, unsupported); then the mesh is loaded and the method built once (a structure
+/// read from a file, Method::reads_structure: opened from the mesh file's streamed summary, the
+/// mesh never loaded, unless T probes need their paths made on it), with the build context of
+/// the first job that runs (a method whose build reads the queries is never
 /// grouped past what it declares: registry.hpp, StructureSharing); then each job's queries in
 /// turn, the protocol of query_protocol.hpp, the peak-RSS mark reset before each. Every result
 /// records the shared build: build.seconds and structure_bytes are the one build's, build.id is

@@ -178,6 +178,45 @@ TEST(QueryKinds, NearIsAreaWeighted) {
   EXPECT_NEAR(double(big) / pts.size(), 0.8, 0.01);
 }
 
+// The sampler keeps the running sum of areas at chunk ends only and adds a chunk up again per
+// pick: the same triangle as the first one whose full prefix sum exceeds u x total, for u at
+// random, at every prefix sum exactly (a chunk's first and last triangles among them), just below
+// each, and at 0 and just below 1; zero-area triangles (at chunk ends too) are never picked.
+TEST(QueryKinds, AreaSamplerPicksWhatAFullPrefixSumPicks) {
+  Mesh m = octasphere(4);  // 2,048 triangles: 8 chunks
+  const auto flat = std::uint32_t(m.vertices.size());
+  m.vertices.push_back({3, 3, 3});
+  for (std::size_t at : {std::size_t(0), qd::AreaSampler::kChunk - 1, qd::AreaSampler::kChunk, 3 * qd::AreaSampler::kChunk + 7})
+    m.triangles.insert(m.triangles.begin() + std::ptrdiff_t(at), {flat, flat, flat});
+  m.triangles.push_back({flat, flat, flat});  // the last triangle too
+  std::vector<double> prefix;
+  double sum = 0;
+  for (std::uint32_t t = 0; t < m.num_triangles(); ++t) {
+    const Vec3d a = m.vertex(t, 0), b = m.vertex(t, 1), c = m.vertex(t, 2);
+    sum += 0.5 * norm(cross(b - a, c - a));
+    prefix.push_back(sum);
+  }
+  const qd::AreaSampler sampler(m);
+  EXPECT_EQ(sampler.total_area(), sum);
+  auto full_pick = [&](double u) {
+    auto it = std::upper_bound(prefix.begin(), prefix.end(), u * sum);
+    if (it == prefix.end()) --it;
+    return std::uint32_t(it - prefix.begin());
+  };
+  std::vector<double> us = {0.0, std::nextafter(1.0, 0.0)};
+  for (double v : prefix) {
+    if (v / sum < 1) us.push_back(v / sum);  // u in [0, 1)
+    us.push_back(std::nextafter(v / sum, 0.0));
+  }
+  Rng rng(5);
+  for (int i = 0; i < 20000; ++i) us.push_back(rng.uniform());
+  for (double u : us) {
+    const std::uint32_t t = sampler.pick(u);
+    ASSERT_EQ(t, full_pick(u)) << "u = " << u;
+    ASSERT_FALSE(m.triangles[t][0] == flat) << "a zero-area triangle was picked at u = " << u;
+  }
+}
+
 TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
   const Mesh m = octasphere(4);
   qd::TriangleGrid grid(m, 0.05);
