@@ -222,6 +222,17 @@ class CertifiedPath {
   /// their work per query answered exceeds a plain search's, the path runs streaks of plain
   /// searches (16, doubling up to 1024), each followed by one trial certificate.
   bool prefer_plain();
+  /// The middle of a plain streak (more than kStepWindow + 1 searches left in it): q is answered
+  /// by a plain search that nothing of the choice needs, so the path only takes q as its last
+  /// point, without its step, its work or the certificate's test (the streak's last kStepWindow
+  /// searches measure the step and the plain estimate for its trial). Counts the search.
+  bool quiet_plain(const Vec3d& q) {
+    if (plain_left_ <= kStepWindow + 1 || !adaptive_) return false;
+    --plain_left_;
+    prev_ = q;
+    have_prev_ = true;
+    return true;
+  }
   /// false: a renewal whenever p leaves the ball (no plain streaks; tests of the certificate).
   void set_adaptive(bool on) { adaptive_ = on; }
   bool adaptive() const { return adaptive_; }
@@ -276,7 +287,8 @@ class CertifiedPath {
 /// path.ahead(p): begin(), then `renew(cert, centre)` runs the tree's branch and bound at the
 /// centre with `cert` as its collector, then finish(), and p is served from the new certificate
 /// (or, if its ball turned out too small to hold p, answered by `plain()`); else (the path's
-/// first point, a plain streak: CertifiedPath::prefer_plain, or under that adaptive policy a
+/// first point, a plain streak: CertifiedPath::prefer_plain (its middle, CertifiedPath::quiet_plain,
+/// before anything else), or under that adaptive policy a
 /// jump: CertifiedPath::jumped, the last step or the path's mean step longer than a leaf cell of
 /// edge leaf_cell) `plain()`, the branch and bound alone. A jump's renewal would collect a ball
 /// of the jump's size (its radius follows the steps): on random points one trial certificate
@@ -288,6 +300,7 @@ template <class WorkNow, class Renew, class Plain>
 DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double leaf_cell, const Vec3d& root_lo,
                                double root_size, QueryCounters& c, TriangleSite* site, WorkNow&& work_now,
                                Renew&& renew, Plain&& plain) {
+  if (path.quiet_plain(p)) return plain();
   path.step_to(p);
   const Work w0 = work_now();
   auto searched = [&] {
