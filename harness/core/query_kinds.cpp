@@ -34,8 +34,8 @@ std::vector<Vec3d> random_points_in_box(const Box3d& box, std::size_t n, std::ui
   return pts;
 }
 
-std::vector<Vec3d> random_points(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
-  return random_points_in_box(mesh.bounds(), n, seed, params);
+std::vector<Vec3d> random_points(const TriangleSource& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+  return random_points_in_box(mesh.summary().bounds, n, seed, params);
 }
 
 }  // namespace query_kinds_detail

@@ -23,12 +23,16 @@
 // Closest points: a dense uniform grid of triangle ids built once (cells at least as large as
 // the contact band). Each contact sample has a distance bound for free (the previous closest
 // point is on the surface), so it only tests the triangles of the few cells overlapping the
-// box p +- bound. Exact, and at 30M triangles ~ a few hundred triangle tests per sample.
+// box p +- bound. Exact, and at 30M triangles ~ a few hundred triangle tests per sample. On a
+// paged mesh (`bvhbench queries --memory-budget`) the grid's ids are paged too; ties go to the
+// lower triangle id, so the path is the same bytes whatever the grid's cells.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "harness/core/correctly_rounded.hpp"
@@ -56,17 +60,22 @@ int TriangleGrid::cell_coord(double x, int axis) const {
   return int(c);
 }
 
-TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_cells) : mesh_(mesh) {
-  Box3d box = mesh.bounds();
-  if (box.empty() || mesh.num_triangles() == 0)
-    throw InputError(mesh.path + ": cannot build a grid over an empty mesh");
+TriangleGrid::TriangleGrid(const TriangleSource& source, double min_cell, std::size_t max_cells, Progress* progress)
+    : source_(source) {
+  const ScratchSpace* scratch = source.scratch();
+  // Paged: the offsets take a sixteenth of the budget, the cache of ids another, a slab of ids
+  // being filled a quarter (the source's own caches hold the rest).
+  if (scratch) max_cells = std::max<std::size_t>(1, std::min(max_cells, scratch->budget_bytes / 16 / sizeof(std::uint32_t)));
+  Box3d box = source.summary().bounds;
+  if (box.empty() || source.num_triangles() == 0)
+    throw InputError(source.path() + ": cannot build a grid over an empty mesh");
   const double diag = box.diagonal();
   const double pad = diag > 0 ? diag * 1e-9 : 1e-9;
   box.lo -= Vec3d(pad, pad, pad);
   box.hi += Vec3d(pad, pad, pad);
   lo_ = box.lo;
   const Vec3d ext = box.extent();
-  h_ = std::max({min_cell, 2 * mesh.average_edge_length(), diag * 1e-6, 1e-300});
+  h_ = std::max({min_cell, 2 * source.average_edge_length(), diag * 1e-6, 1e-300});
   for (;;) {
     std::size_t cells = 1;
     for (int i = 0; i < 3; ++i) {
@@ -76,23 +85,29 @@ TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_ce
     if (cells <= max_cells) break;
     h_ *= 1.25;
   }
-  // Two passes over the triangles (count, then fill), each working out a triangle's cells from
-  // its corners again: nothing per vertex or per triangle is kept between them, so the grid's
-  // build holds its offsets and ids alone (at 128M triangles, per-vertex cells and per-triangle
-  // single cells kept 1.3 GB more).
-  auto cell_range = [&](std::uint32_t t, int lo[3], int hi[3]) {
-    const auto& tri = mesh.triangles[t];
-    for (int i = 0; i < 3; ++i) {
-      const int a = cell_coord(mesh.vertices[tri[0]][i], i), b = cell_coord(mesh.vertices[tri[1]][i], i),
-                c = cell_coord(mesh.vertices[tri[2]][i], i);
-      lo[i] = std::min({a, b, c});
-      hi[i] = std::max({a, b, c});
-    }
-  };
+  const std::size_t slab_ids = scratch ? std::max<std::size_t>(1, scratch->budget_bytes / 4 / sizeof(std::uint32_t))
+                                       : std::numeric_limits<std::size_t>::max();
+  fill(slab_ids, progress);
+}
+
+void TriangleGrid::cell_range(std::uint32_t t, int lo[3], int hi[3]) const {
+  const std::array<Vec3d, 3> v = source_.corners(t);
+  for (int i = 0; i < 3; ++i) {
+    const int a = cell_coord(v[0][i], i), b = cell_coord(v[1][i], i), c = cell_coord(v[2][i], i);
+    lo[i] = std::min({a, b, c});
+    hi[i] = std::max({a, b, c});
+  }
+}
+
+// A pass to count each cell's triangles, then one pass per slab (a run of cells whose ids fit
+// `slab_ids`; in memory, one slab for all) to write their ids, in increasing order within each
+// cell. Each pass works out a triangle's cells from its corners again: nothing per vertex or per
+// triangle is kept between passes, so the build holds the offsets and one slab of ids alone.
+void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
   auto linear = [&](int x, int y, int z) { return (std::size_t(z) * n_[1] + y) * n_[0] + x; };
   const std::size_t cells = num_cells();
   offsets_.assign(cells + 1, 0);
-  const auto nt = std::uint32_t(mesh.num_triangles());
+  const auto nt = std::uint32_t(source_.num_triangles());
   std::uint64_t refs = 0;
   for (std::uint32_t t = 0; t < nt; ++t) {
     int lo[3], hi[3];
@@ -101,21 +116,57 @@ TriangleGrid::TriangleGrid(const Mesh& mesh, double min_cell, std::size_t max_ce
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) ++offsets_[linear(x, y, z)];
     refs += std::uint64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000));
   }
-  if (refs >= 0xffffffffull) throw InputError(mesh.path + ": too many triangle-cell pairs for the grid");
-  // offsets_[c] becomes the end of cell c; filling backwards leaves it at the start, with the
-  // ids of each cell in increasing order.
+  if (refs >= 0xffffffffull) throw InputError(source_.path() + ": too many triangle-cell pairs for the grid");
+  // offsets_[c] becomes the start of cell c; while a slab is filled, the offsets of its cells
+  // are their write cursors and end at the start of the next cell.
   std::uint32_t sum = 0;
-  for (std::size_t c = 0; c < cells; ++c) { sum += offsets_[c]; offsets_[c] = sum; }
+  for (std::size_t c = 0; c < cells; ++c) sum += std::exchange(offsets_[c], sum);
   offsets_[cells] = sum;
-  ids_.resize(sum);
-  for (std::uint32_t t = nt; t-- > 0;) {
-    int lo[3], hi[3];
-    cell_range(t, lo, hi);
-    for (int z = lo[2]; z <= hi[2]; ++z)
-      for (int y = lo[1]; y <= hi[1]; ++y)
-        for (int x = lo[0]; x <= hi[0]; ++x) ids_[--offsets_[linear(x, y, z)]] = t;
+  const ScratchSpace* scratch = source_.scratch();
+  if (scratch)
+    paged_ids_ = std::make_unique<ScratchArray<std::uint32_t>>(scratch->dir, "triangle grid ids",
+                                                                scratch->budget_bytes / 16);
+  std::vector<std::size_t> slab_end;  // slab k is cells [slab_end[k - 1], slab_end[k])
+  for (std::size_t c0 = 0; c0 < cells;) {
+    std::size_t c1 = c0 + 1;  // a cell fuller than a slab is a slab of its own
+    while (c1 < cells && offsets_[c1 + 1] - offsets_[c0] <= slab_ids) ++c1;
+    slab_end.push_back(c0 = c1);
   }
+  slabs_ = slab_end.size();
+  // Reserved once for the largest slab: growing it between slabs would hold two at once.
+  std::vector<std::uint32_t> slab;
+  std::uint32_t largest = 0;
+  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++])
+    largest = std::max(largest, offsets_[slab_end[k]] - offsets_[c0]);
+  slab.reserve(largest);
+  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++]) {
+    const std::size_t c1 = slab_end[k];
+    const std::uint32_t base = offsets_[c0];
+    slab.assign(offsets_[c1] - base, 0);
+    for (std::uint32_t t = 0; t < nt; ++t) {
+      int lo[3], hi[3];
+      cell_range(t, lo, hi);
+      if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000) / double(slab_end.size()));
+      if (linear(hi[0], hi[1], hi[2]) < c0 || linear(lo[0], lo[1], lo[2]) >= c1) continue;
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            const std::size_t c = linear(x, y, z);
+            if (c >= c0 && c < c1) slab[offsets_[c]++ - base] = t;
+          }
+    }
+    if (paged_ids_) paged_ids_->append(slab.data(), slab.size());
+  }
+  if (paged_ids_) {
+    paged_ids_->finish();
+  } else {
+    ids_ = std::move(slab);
+  }
+  // Every offset is now its cell's end: shifted by one, each is its cell's start again.
+  for (std::size_t c = cells; c > 0; --c) offsets_[c] = offsets_[c - 1];
+  offsets_[0] = 0;
 }
 
 bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
@@ -130,9 +181,9 @@ bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
   auto scan = [&](int x, int y, int z) {
     const std::size_t c = (std::size_t(z) * n_[1] + y) * n_[0] + x;
     for (std::uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) {
-      const std::uint32_t t = ids_[k];
-      const auto& tri = mesh_.triangles[t];
-      const Vec3d &a = mesh_.vertices[tri[0]], &b = mesh_.vertices[tri[1]], &cc = mesh_.vertices[tri[2]];
+      const std::uint32_t t = paged_ids_ ? (*paged_ids_)[k] : ids_[k];
+      const std::array<Vec3d, 3> v = source_.corners(t);
+      const Vec3d &a = v[0], &b = v[1], &cc = v[2];
       // The triangle's box first: most triangles of a visited cell are farther than the best.
       double box2 = 0;
       for (int i = 0; i < 3; ++i) {
@@ -182,15 +233,15 @@ bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
 // the haptic path
 // ---------------------------------------------------------------------------------------------
 
-HapticLayout haptic_layout(const Mesh& mesh, const Params& p, bool approach_and_leave) {
+HapticLayout haptic_layout(const TriangleSource& mesh, const Params& p, bool approach_and_leave) {
   // Each value is in its declared range (query_kinds.cpp: lengths, speeds and times > 0);
   // what is checked here is how they bound each other.
   auto get = [&](const char* key) { return p.get_real(key); };
   const double model = get("model_size_m"), rate = get("rate_hz"), vmax = get("max_speed");
   const double slide = get("slide_speed"), band_mm = get("band_mm"), contact_ms = get("contact_ms");
-  const double diag = mesh.bounds().diagonal();
+  const double diag = mesh.summary().bounds.diagonal();
   if (!(diag > 0) || !std::isfinite(diag))
-    throw InputError(mesh.path + ": the mesh has no extent to move a probe over");
+    throw InputError(mesh.path() + ": the mesh has no extent to move a probe over");
   HapticLayout L;
   L.units_per_metre = diag / model;
   L.max_step = vmax / rate * L.units_per_metre;
@@ -237,10 +288,10 @@ struct EpisodeMotion {
 
 /// First contact: an area-weighted surface point, outward along its face normal, and a random
 /// heading in the tangent plane.
-ProbeState first_contact(const Mesh& mesh, const AreaSampler& sampler, Rng& rng) {
+ProbeState first_contact(const TriangleSource& mesh, const AreaSampler& sampler, Rng& rng) {
   ProbeState s;
   const std::uint32_t t0 = sampler.pick(rng.uniform());
-  const Vec3d a = mesh.vertex(t0, 0), b = mesh.vertex(t0, 1), c = mesh.vertex(t0, 2);
+  const auto [a, b, c] = mesh.corners(t0);
   const double r1 = rng.uniform(), r2 = rng.uniform();
   s.surf = uniform_in_triangle(a, b, c, r1, r2);
   s.nrm = triangle_normal(a, b, c);
@@ -276,7 +327,7 @@ struct PathSettings {
 
 /// One step of the contact phase at time t: turn the heading, predict, follow the surface to the
 /// closest point near the prediction, and move within the band (at most L.max_step).
-void slide_step(const PathSettings& S, const Mesh& mesh, const TriangleGrid& grid, const EpisodeMotion& motion,
+void slide_step(const PathSettings& S, const TriangleSource& mesh, const TriangleGrid& grid, const EpisodeMotion& motion,
                 Rng& rng, double t, ProbeState& s) {
   const double dt = S.dt, tau = S.tau;
   s.omega += -s.omega * dt / tau + S.turn_rate * std::sqrt(2 * dt / tau) * rng.normal();
@@ -293,8 +344,8 @@ void slide_step(const PathSettings& S, const Mesh& mesh, const TriangleGrid& gri
   if (grid.closest(pred, r, &hit)) {
     const Vec3d u = pred - hit.point;
     const double d = norm(u);
-    const Vec3d nf = triangle_normal(mesh.vertex(hit.triangle, 0), mesh.vertex(hit.triangle, 1),
-                                     mesh.vertex(hit.triangle, 2));
+    const auto [a, b, c] = mesh.corners(hit.triangle);
+    const Vec3d nf = triangle_normal(a, b, c);
     if (d > S.L.band * 1e-6) {
       s.nrm = u / d * (dot(u, nf) >= 0 ? 1.0 : -1.0);
     } else if (norm(nf) > 0) {
@@ -310,7 +361,7 @@ void slide_step(const PathSettings& S, const Mesh& mesh, const TriangleGrid& gri
 }
 
 /// One episode appended to out (until it holds n points): approach, contact, leave.
-void append_episode(const PathSettings& S, const Mesh& mesh, const AreaSampler& sampler, const TriangleGrid& grid,
+void append_episode(const PathSettings& S, const TriangleSource& mesh, const AreaSampler& sampler, const TriangleGrid& grid,
                     double slide, Rng& rng, std::size_t n, std::vector<Vec3d>& out) {
   const HapticLayout& L = S.L;
   const double dt = S.dt, T = S.T;
@@ -341,18 +392,19 @@ void append_episode(const PathSettings& S, const Mesh& mesh, const AreaSampler& 
 
 // Both kinds' paths: with approach_and_leave false the episodes are their contact phase alone
 // (the random draws are the same, so the haptic path's bytes do not depend on this option).
-std::vector<Vec3d> probe_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params,
+std::vector<Vec3d> probe_path(const TriangleSource& mesh, std::size_t n, std::uint64_t seed, const Params& params,
                               bool approach_and_leave) {
   PathSettings S;
   S.L = haptic_layout(mesh, params, approach_and_leave);
   S.dt = 1.0 / params.get_real("rate_hz");
   S.turn_rate = params.get_real("turn_rate");
   S.T = double(S.L.approach) * S.dt;
-  S.tiny = mesh.bounds().diagonal() * 1e-12;
+  S.tiny = mesh.summary().bounds.diagonal() * 1e-12;
   const double slide = params.get_real("slide_speed") * S.L.units_per_metre;  // units / s
   AreaSampler sampler(mesh);
-  Progress progress_grid("haptic: triangle grid", 1, mesh.num_triangles() >= 2000000);
-  const TriangleGrid grid(mesh, S.L.band);
+  Progress progress_grid(std::string("haptic: triangle grid") + (mesh.scratch() ? " (paged)" : ""),
+                         2.0 * double(mesh.num_triangles()), mesh.num_triangles() >= 2000000);
+  const TriangleGrid grid(mesh, S.L.band, std::size_t(1) << 26, &progress_grid);
   progress_grid.finish();
   Progress progress("haptic path", double(n), n >= 200000);
   Rng rng(seed);
@@ -368,11 +420,11 @@ std::vector<Vec3d> probe_path(const Mesh& mesh, std::size_t n, std::uint64_t see
 
 }  // namespace
 
-std::vector<Vec3d> haptic_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+std::vector<Vec3d> haptic_path(const TriangleSource& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
   return probe_path(mesh, n, seed, params, true);
 }
 
-std::vector<Vec3d> contact_path(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
+std::vector<Vec3d> contact_path(const TriangleSource& mesh, std::size_t n, std::uint64_t seed, const Params& params) {
   return probe_path(mesh, n, seed, params, false);
 }
 

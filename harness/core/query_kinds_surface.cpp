@@ -20,10 +20,9 @@ namespace {
 /// the whole mesh and a pick's pass over one chunk both add through here, one triangle at a time
 /// in triangle order, so a chunk's running sums are the same doubles both times.
 template <class At>
-double add_areas(const Mesh& mesh, std::size_t t0, std::size_t t1, double sum, At&& at) {
+double add_areas(const TriangleSource& mesh, std::size_t t0, std::size_t t1, double sum, At&& at) {
   for (std::size_t t = t0; t < t1; ++t) {
-    const Vec3d a = mesh.vertex(std::uint32_t(t), 0), b = mesh.vertex(std::uint32_t(t), 1),
-                c = mesh.vertex(std::uint32_t(t), 2);
+    const auto [a, b, c] = mesh.corners(std::uint32_t(t));
     sum += 0.5 * norm(cross(b - a, c - a));
     if (at(t, sum)) break;
   }
@@ -32,14 +31,14 @@ double add_areas(const Mesh& mesh, std::size_t t0, std::size_t t1, double sum, A
 
 }  // namespace
 
-AreaSampler::AreaSampler(const Mesh& mesh) : mesh_(mesh) {
+AreaSampler::AreaSampler(const TriangleSource& mesh) : mesh_(mesh) {
   const std::size_t nt = mesh.num_triangles();
   chunk_end_.reserve((nt + kChunk - 1) / kChunk);
   double sum = 0;
   for (std::size_t t0 = 0; t0 < nt; t0 += kChunk)
     chunk_end_.push_back(sum = add_areas(mesh, t0, std::min(nt, t0 + kChunk), sum, [](std::size_t, double) { return false; }));
   if (!(sum > 0) || !std::isfinite(sum))
-    throw InputError(mesh.path + ": the mesh has no surface area to sample");
+    throw InputError(mesh.path() + ": the mesh has no surface area to sample");
 }
 
 std::uint32_t AreaSampler::pick(double u) const {
@@ -65,28 +64,28 @@ Vec3d uniform_in_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c, double
   return a * (1 - s) + b * (s * (1 - r2)) + c * (s * r2);
 }
 
-std::vector<Vec3d> near_points(const Mesh& mesh, std::size_t n, std::uint64_t seed,
+std::vector<Vec3d> near_points(const TriangleSource& mesh, std::size_t n, std::uint64_t seed,
                                const Params& params) {
-  const double sigma = params.get_real("sigma") * mesh.bounds().diagonal();
+  const double sigma = params.get_real("sigma") * mesh.summary().bounds.diagonal();
   if (!(sigma >= 0)) throw InputError("query kind 'near': sigma must be >= 0");
   AreaSampler sampler(mesh);
   Rng rng(seed);
   std::vector<Vec3d> pts(n);
   for (auto& p : pts) {
     const std::uint32_t t = sampler.pick(rng.uniform());
-    const Vec3d a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+    const auto [a, b, c] = mesh.corners(t);
     const double r1 = rng.uniform(), r2 = rng.uniform();
     p = uniform_in_triangle(a, b, c, r1, r2) + triangle_normal(a, b, c) * (sigma * rng.normal());
   }
   return pts;
 }
 
-std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t seed,
+std::vector<Vec3d> surface_points(const TriangleSource& mesh, std::size_t n, std::uint64_t seed,
                                   const Params& params) {
   const double pv = params.get_real("vertex_share"), pe = params.get_real("edge_share");
   if (!(pv >= 0 && pe >= 0 && pv + pe <= 1 + 1e-12))
     throw InputError("query kind 'surface': vertex_share and edge_share must be >= 0 with a sum <= 1");
-  if (mesh.num_triangles() == 0) throw InputError(mesh.path + ": the mesh has no triangle");
+  if (mesh.num_triangles() == 0) throw InputError(mesh.path() + ": the mesh has no triangle");
   // Vertices and edges are taken from uniformly chosen triangles, so degenerate triangles get
   // their share; faces are area-weighted (and need some area only if any face point is asked).
   std::unique_ptr<AreaSampler> sampler;
@@ -97,17 +96,19 @@ std::vector<Vec3d> surface_points(const Mesh& mesh, std::size_t n, std::uint64_t
     const double u = rng.uniform();
     if (u < pv) {
       const auto t = std::uint32_t(rng.below(mesh.num_triangles()));
-      p = mesh.vertex(t, int(rng.below(3)));
+      p = mesh.corners(t)[rng.below(3)];
     } else if (u < pv + pe) {
       const auto t = std::uint32_t(rng.below(mesh.num_triangles()));
       const int e = int(rng.below(3));
-      const Vec3d a = mesh.vertex(t, e), b = mesh.vertex(t, (e + 1) % 3);
+      const std::array<Vec3d, 3> v = mesh.corners(t);
+      const Vec3d a = v[std::size_t(e)], b = v[std::size_t((e + 1) % 3)];
       const double s = rng.uniform();
       p = a + (b - a) * s;
     } else {
       const std::uint32_t t = sampler->pick(rng.uniform());
       const double r1 = rng.uniform(), r2 = rng.uniform();
-      p = uniform_in_triangle(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2), r1, r2);
+      const auto [a, b, c] = mesh.corners(t);
+      p = uniform_in_triangle(a, b, c, r1, r2);
     }
   }
   return pts;

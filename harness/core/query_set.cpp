@@ -7,6 +7,7 @@
 #include <string>
 
 #include "harness/core/mesh.hpp"
+#include "harness/core/triangle_source.hpp"
 #include "harness/util/errors.hpp"
 #include "harness/util/nearest_word.hpp"
 
@@ -80,10 +81,17 @@ std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, s
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,
                                     nlohmann::json* meta) {
+  return generate_queries(MeshTriangles(mesh), kind, n, seed, given_params, meta);
+}
+
+std::vector<Vec3d> generate_queries(const TriangleSource& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed, const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta) {
   const QueryKind& k = query_kind(kind);
   const Params params = query_kind_params(k, given_params);
   auto pts = k.generate(mesh, n, seed, params);
-  if (meta) *meta = sidecar(mesh.path, mesh.sha256, mesh.num_triangles(), k, pts.size(), seed, params);
+  const MeshSummary& s = mesh.summary();
+  if (meta) *meta = sidecar(s.path, s.sha256, s.triangles, k, pts.size(), seed, params);
   return pts;
 }
 

@@ -22,6 +22,7 @@ namespace bvhbench {
 
 struct Mesh;
 struct MeshSummary;
+class TriangleSource;
 
 struct QuerySet {
   std::string path;         ///< the .npy, .xyz or .csv
@@ -39,8 +40,9 @@ struct QueryKind {
   /// Its generator's parameters, declared as a method's options are (real numbers with a
   /// default, a help line and a range; all recorded in the sidecar); user values override by key.
   std::vector<ParamSpec> params;
-  /// Generates n points on `mesh` from `seed` with the resolved parameters.
-  std::function<std::vector<Vec3d>(const Mesh& mesh, std::size_t n, std::uint64_t seed, const Params& params)>
+  /// Generates n points on `mesh` (in memory or paged: triangle_source.hpp) from `seed` with the
+  /// resolved parameters.
+  std::function<std::vector<Vec3d>(const TriangleSource& mesh, std::size_t n, std::uint64_t seed, const Params& params)>
       generate;
   bool ordered = false;  ///< a path whose order matters (haptic)
   /// For a kind that needs only the mesh's box (random): its generator from the box, which
@@ -87,6 +89,11 @@ const QueryKind& query_kind(const std::string& name);
 std::vector<Vec3d> generate_queries(const Mesh& mesh, const std::string& kind, std::size_t n,
                                     std::uint64_t seed,
                                     const std::map<std::string, double>& given_params,
+                                    nlohmann::json* meta);
+/// The same on the mesh's triangles however they are held (a loaded mesh, a paged copy): the
+/// same points and sidecar.
+std::vector<Vec3d> generate_queries(const TriangleSource& mesh, const std::string& kind, std::size_t n,
+                                    std::uint64_t seed, const std::map<std::string, double>& given_params,
                                     nlohmann::json* meta);
 /// The same from the mesh's summary, for a kind with generate_in_box (the same points and
 /// sidecar as from the mesh); std::logic_error for another kind.

@@ -121,6 +121,40 @@ inline void expect_input_error(const std::function<void()>& f, const std::string
   }
 }
 
+/// Every mesh fixture, good or malformed, in every format (fixtures/meshes): `reader(path)` must
+/// read what load_mesh reads (`good(path, mesh)` checks it) and refuse what load_mesh refuses, with
+/// the same message. Returns {good, refused}, for the caller to check that both kinds were seen.
+inline std::pair<int, int> expect_reads_every_fixture_as_load_mesh(
+    const std::function<void(const std::string&)>& reader,
+    const std::function<void(const std::string&, const Mesh&)>& good) {
+  int loaded = 0, refused = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(BVHBENCH_FIXTURES_DIR) + "/meshes")) {
+    if (!entry.is_regular_file()) continue;
+    const std::string path = entry.path().string();
+    SCOPED_TRACE(path);
+    std::string load_error;
+    Mesh m;
+    try {
+      m = load_mesh(path);
+    } catch (const InputError& e) {
+      load_error = e.what();
+    }
+    if (load_error.empty()) {
+      good(path, m);
+      ++loaded;
+      continue;
+    }
+    try {
+      reader(path);
+      ADD_FAILURE() << "read what load_mesh refused: " << load_error;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), load_error);
+    }
+    ++refused;
+  }
+  return {loaded, refused};
+}
+
 // ---- one mesh in every format (the bytes of a file) ----
 //
 // Coordinates are written as the shortest text that reads back as the same double (to_chars),

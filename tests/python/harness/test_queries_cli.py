@@ -142,3 +142,37 @@ def test_empty_mesh_is_rejected(bvhbench, tmp_path):
     assert r.returncode == 2
     assert "empty.ply" in r.stderr
     assert not os.path.exists(tmp_path / "q.npy")
+
+
+@pytest.fixture(scope="module")
+def larger_torus_ply(tmp_path_factory):
+    """A torus of 60,000 triangles: about 2.6 MiB to generate on in memory."""
+    d = tmp_path_factory.mktemp("larger_mesh")
+    g = FAMILIES["torus"].fn(Context(""), triangles=60000, major_radius=1.0, minor_radius=0.35)
+    path = d / "torus60k.ply"
+    write_ply(str(path), g.vertices, g.faces)
+    return path
+
+
+@pytest.mark.parametrize("kind", ["near", "surface", "haptic", "contact"])
+def test_a_mesh_over_the_memory_budget_is_paged_to_the_same_bytes(bvhbench, larger_torus_ply, tmp_path, kind):
+    extra = ["--param", "contact_ms=300"] if kind in ("haptic", "contact") else []
+    common = ["queries", "--mesh", larger_torus_ply, "--kind", kind, "--n", 2000, "--seed", 3, *extra]
+    loaded = run(bvhbench, *common, "--out", tmp_path / "loaded.npy", check=0)
+    paged = run(bvhbench, *common, "--memory-budget", 1, "--out", tmp_path / "paged.npy", check=0)
+    assert "paged" not in loaded.stderr
+    assert "over --memory-budget 1: paged from temporary files in " + str(tmp_path) in paged.stderr
+    assert (tmp_path / "loaded.npy").read_bytes() == (tmp_path / "paged.npy").read_bytes()
+    assert (tmp_path / "loaded.json").read_bytes() == (tmp_path / "paged.json").read_bytes()
+    # The temporary files are gone.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["loaded.json", "loaded.npy", "paged.json", "paged.npy"]
+
+
+@pytest.mark.parametrize("budget", ["0", "-5", "lots"])
+def test_a_bad_memory_budget_exits_2(bvhbench, torus_ply, tmp_path, budget):
+    mesh, _ = torus_ply
+    r = run(bvhbench, "queries", "--mesh", mesh, "--kind", "haptic", "--n", 10, "--memory-budget", budget,
+            "--out", tmp_path / "q.npy")
+    assert r.returncode == 2, r.stderr
+    assert "--memory-budget" in r.stderr
+    assert not os.path.exists(tmp_path / "q.npy")

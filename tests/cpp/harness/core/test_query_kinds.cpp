@@ -196,7 +196,8 @@ TEST(QueryKinds, AreaSamplerPicksWhatAFullPrefixSumPicks) {
     sum += 0.5 * norm(cross(b - a, c - a));
     prefix.push_back(sum);
   }
-  const qd::AreaSampler sampler(m);
+  const MeshTriangles triangles(m);
+  const qd::AreaSampler sampler(triangles);
   EXPECT_EQ(sampler.total_area(), sum);
   auto full_pick = [&](double u) {
     auto it = std::upper_bound(prefix.begin(), prefix.end(), u * sum);
@@ -219,7 +220,8 @@ TEST(QueryKinds, AreaSamplerPicksWhatAFullPrefixSumPicks) {
 
 TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
   const Mesh m = octasphere(4);
-  qd::TriangleGrid grid(m, 0.05);
+  const MeshTriangles triangles(m);
+  qd::TriangleGrid grid(triangles, 0.05);
   Rng rng(11);
   for (int i = 0; i < 400; ++i) {
     Vec3d p(rng.uniform(-1.3, 1.3), rng.uniform(-1.3, 1.3), rng.uniform(-1.3, 1.3));
@@ -238,7 +240,7 @@ TEST(QueryKinds, TriangleGridAgreesWithBruteForce) {
 TEST(QueryKinds, HapticHasNoJumpsInsideEpisodesAndStaysInTheContactBand) {
   const Mesh m = octasphere(4);  // 2048 triangles, diagonal 2 sqrt(3) = "30 cm"
   const QueryKind* k = find_query_kind("haptic");
-  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(*k, KindParams{}));
+  const qd::HapticLayout L = qd::haptic_layout(MeshTriangles(m), query_kind_params(*k, KindParams{}));
   ASSERT_EQ(L.approach, 150u);  // 1.5 * 20 mm / 0.2 m/s at 1 kHz
   ASSERT_EQ(L.contact, 2000u);
   const std::size_t n = 2 * L.total() + 1000;  // two whole episodes and a cut one
@@ -281,7 +283,7 @@ TEST(QueryKinds, ContactIsTheHapticPathsContactPhasesAlone) {
   // very samples the `haptic` kind spends in the band.
   const Mesh m = octasphere(3);
   const KindParams band = {{"band_mm", 0.2}, {"slide_speed", 0.3}, {"contact_ms", 300}};
-  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("haptic"), band));
+  const qd::HapticLayout L = qd::haptic_layout(MeshTriangles(m), query_kind_params(query_kind("haptic"), band));
   const std::size_t episodes = 3;
   auto haptic = generate_queries(m, "haptic", episodes * L.total(), 11, band, nullptr);
   auto contact = generate_queries(m, "contact", episodes * L.contact, 11, band, nullptr);
@@ -296,7 +298,7 @@ TEST(QueryKinds, ContactStaysInItsBandAtEveryBandAndSpeed) {
   for (double band_mm : {0.05, 0.2, 0.5})
     for (double speed : {0.05, 0.3}) {
       const KindParams given = {{"band_mm", band_mm}, {"slide_speed", speed}, {"contact_ms", 500}};
-      const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("contact"), given), false);
+      const qd::HapticLayout L = qd::haptic_layout(MeshTriangles(m), query_kind_params(query_kind("contact"), given), false);
       ASSERT_EQ(L.approach, 0u);
       ASSERT_EQ(L.leave, 0u);
       ASSERT_EQ(L.contact, 500u);
@@ -341,7 +343,7 @@ TEST(QueryKinds, HapticFollowsTheSurfaceOfANonConvexModel) {
   // Skipped only when the file is absent: a bunny that is there but fails to load is a failure.
   if (!std::filesystem::exists(bunny)) GTEST_SKIP() << "no shared bunny: " << bunny;
   const Mesh m = load_mesh(bunny);
-  const qd::HapticLayout L = qd::haptic_layout(m, query_kind_params(query_kind("haptic"), KindParams{}));
+  const qd::HapticLayout L = qd::haptic_layout(MeshTriangles(m), query_kind_params(query_kind("haptic"), KindParams{}));
   const std::size_t n = L.total();
   auto pts = generate_queries(m, "haptic", n, 9, {}, nullptr);
   double largest_step = 0;

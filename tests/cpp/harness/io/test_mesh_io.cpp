@@ -587,32 +587,12 @@ void expect_same_summary(const MeshSummary& a, const MeshSummary& b) {
 // Every fixture, good or malformed, in every format: the summary of a streamed pass is the loaded
 // mesh's, and a file load_mesh refuses is refused with the same message.
 TEST(MeshSummary, StreamedPassMatchesTheLoadedMeshOnEveryFixture) {
-  int good = 0, bad = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(BVHBENCH_FIXTURES_DIR) + "/meshes")) {
-    if (!entry.is_regular_file()) continue;
-    const std::string path = entry.path().string();
-    SCOPED_TRACE(path);
-    std::string load_error;
-    Mesh m;
-    try {
-      m = load_mesh(path);
-    } catch (const InputError& e) {
-      load_error = e.what();
-    }
-    if (load_error.empty()) {
-      expect_same_summary(summarize_mesh(path), m.summary());
-      EXPECT_EQ(m.summary().triangles, m.num_triangles());
-      ++good;
-    } else {
-      try {
-        summarize_mesh(path);
-        ADD_FAILURE() << "summarize_mesh accepted what load_mesh refused: " << load_error;
-      } catch (const InputError& e) {
-        EXPECT_EQ(std::string(e.what()), load_error);
-      }
-      ++bad;
-    }
-  }
+  const auto [good, bad] = expect_reads_every_fixture_as_load_mesh(
+      [](const std::string& path) { summarize_mesh(path); },
+      [](const std::string& path, const Mesh& m) {
+        expect_same_summary(summarize_mesh(path), m.summary());
+        EXPECT_EQ(m.summary().triangles, m.num_triangles());
+      });
   EXPECT_GT(good, 10);
   EXPECT_GT(bad, 30);
 }
