@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "build_info.hpp"
+#include "harness/core/query_set.hpp"
 #include "harness/run/calibration.hpp"
 #include "harness/run/job_executor.hpp"
 #include "harness/util/json_path.hpp"
@@ -33,6 +34,9 @@ constexpr double kChildSeconds = 0.6;
 constexpr double kOracleSecondsPerTriangle = 6e-7;
 constexpr double kOracleSecondsPerQueryLog = 2e-6;
 constexpr double kQueryGenSecondsPerPoint = 2e-6;
+// A probe path's (haptic, contact) triangle grid, per triangle, beyond the load: two passes over
+// the triangles in memory, more when the mesh is paged (the 128M model: 43 s loaded, 64 s paged).
+constexpr double kProbeGridSecondsPerTriangle = 2.5e-7;
 // Where no method has run at all: a build per triangle x log2 triangles, a query.
 constexpr double kBuildSecondsPerTriangleLog = 4e-8;
 constexpr double kQuerySeconds = 2e-5;
@@ -383,6 +387,8 @@ double SuiteEstimator::data_seconds(const SuiteConfig& cfg, const std::vector<Jo
     if (fs::exists(fs::path(data_dir) / "queries" / (file_safe(j.mesh.name) + "__" + label + ".npy"), ec)) continue;
     const double t = triangles(j), n = double(j.queries.n);
     s += rest_fixed_ + rest_per_triangle_ * t + kQueryGenSecondsPerPoint * n;
+    const QueryKind* kind = find_query_kind(j.queries.kind);
+    if (kind && kind->ordered) s += kProbeGridSecondsPerTriangle * t;
     if (cfg.truth)
       s += rest_fixed_ + rest_per_triangle_ * t + kOracleSecondsPerTriangle * t + kOracleSecondsPerQueryLog * n * log2_of(t);
   }

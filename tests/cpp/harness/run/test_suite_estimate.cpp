@@ -125,3 +125,19 @@ TEST(SuiteEstimate, TheTimeLeftFollowsHowTheFinishedJobsCompared) {
   EXPECT_DOUBLE_EQ(time_left(100, 10, 20), 200);  // twice as slow as priced
   EXPECT_DOUBLE_EQ(time_left(100, 10, 5), 50);
 }
+
+// A probe path (haptic, contact) builds a triangle grid over the whole mesh: on 100M triangles it
+// is priced tens of seconds above a random set of the same size, which needs only the mesh's box.
+TEST(SuiteEstimate, AProbePathOnALargeMeshIsPricedForItsGrid) {
+  TmpDir d;
+  write_ply_header(d.file("large.ply"), 100000000);
+  const SuiteEstimator e({});
+  auto data_seconds_of = [&](const std::string& kind) {
+    write_file_bytes(d.file(kind + ".yml"), "name: e\ntruth: false\nmatrices:\n  - meshes: [large.ply]\n    queries: [{kind: " +
+                                                kind + ", n: 1000, seed: 1}]\n    query: [distance]\n    methods: [ebp_octree]\n");
+    const SuiteConfig cfg = load_suite(d.file(kind + ".yml"));
+    return price_of(e, cfg, true, d.file("data")).data_seconds;
+  };
+  EXPECT_GT(data_seconds_of("haptic"), data_seconds_of("random") + 20);
+  EXPECT_GT(data_seconds_of("contact"), data_seconds_of("random") + 20);
+}
