@@ -41,8 +41,8 @@ std::vector<ParamSpec> ebp_params() {
        "is below a plain search's, plain streaks elsewhere; always = a certificate at every renewal; same answers",
        {"auto", "always"}},
       {"chained_sign", ParamType::boolean, ParamRole::query, "true",
-       "coherent distance on closed meshes: the previous query's sign when the probe stays within its "
-       "distance of it (no inside test); same answers", {}},
+       "coherent distance on closed meshes: the previous query's sign when the step is shorter than the "
+       "two queries' distances together (no inside test); same answers", {}},
   };
   specs.insert(specs.end(), query.begin(), query.end());
   const std::vector<ParamSpec> ooc = ooc_params();

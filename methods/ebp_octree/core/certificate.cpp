@@ -367,9 +367,9 @@ bool CertifiedPath::radii(double* r_max, double* r_floor) const {
   return true;
 }
 
-bool CertifiedPath::sign_chained(const Vec3d& q, double tol, bool* inside) const {
+bool CertifiedPath::sign_chained(const Vec3d& q, double distance, double tol, bool* inside) const {
   if (!sign_ok_) return false;
-  const double lim = sign_best_ - 2 * tol;
+  const double lim = (sign_best_ - 2 * tol) + std::max(0.0, distance - 2 * tol);
   if (!(lim > 0) || !(squared_norm(q - sign_p_) < lim * lim)) return false;
   *inside = sign_in_;
   return true;

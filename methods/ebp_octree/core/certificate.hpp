@@ -246,10 +246,12 @@ class CertifiedPath {
   /// is known. A renewal's ball follows the path's mean step: one jump in its window is enough to
   /// skip renewals.
   bool jumped(double leaf_cell) const;
-  /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| (less the rounding
-  /// bound tol): that open ball holds no surface point, so the winding number is constant in
-  /// it. Only on closed meshes (elsewhere the sign is not a function of the winding number).
-  bool sign_chained(const Vec3d& q, double tol, bool* inside) const;
+  /// q's sign is the previous query's when |q - q_prev| < |best(q_prev)| + |best(q)| (less the
+  /// rounding bound tol for each): the open balls of those radii about q_prev and q hold no
+  /// surface point, and together they cover the segment between the two points when it is that
+  /// short, so the winding number is the same at both ends. `distance` is q's unsigned distance.
+  /// Only on closed meshes (elsewhere the sign is not a function of the winding number).
+  bool sign_chained(const Vec3d& q, double distance, double tol, bool* inside) const;
   /// The point of the last answered() (meaningful once sign_chained has returned true).
   const Vec3d& sign_point() const { return sign_p_; }
   /// Records q's answer (unsigned distance, sign) for the next sign_chained.

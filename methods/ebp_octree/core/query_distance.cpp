@@ -768,11 +768,11 @@ DistanceAnswer Query::distance(const Vec3d& p) {
   DistanceAnswer r = unsigned_distance(p);
   bool in;
   if (coherent_ && chained_sign_ && t_.closed) {
-    // The chained sign (certificate.hpp): the previous point's, when p is in the ball about it
-    // that holds no surface; the coherent inside state then moves along (the winding number is
-    // the same at p), so that the next inside test steps from p.
+    // The chained sign (certificate.hpp): the previous point's, when the balls about it and p
+    // that hold no surface cover the segment between them; the coherent inside state then moves
+    // along (the winding number is the same at p), so that the next inside test steps from p.
     const Vec3d prev = path_->sign_point();
-    if (path_->sign_chained(p, certificate_tol(p, t_.root_lo, t_.root_size), &in)) {
+    if (path_->sign_chained(p, r.distance, certificate_tol(p, t_.root_lo, t_.root_size), &in)) {
       ++counters.signs_chained;
       if (prev_ok_ && prev_p_ == prev) prev_p_ = p;
     } else {

@@ -383,7 +383,7 @@ DistanceAnswer OutOfCore::distance(const Vec3d& p) {
   DistanceAnswer r = unsigned_distance_frame(q);
   bool in;
   if (coherent_ && chained_sign_ && closed_) {  // the chained sign, as Query::distance
-    if (path_->sign_chained(q, certificate_tol(q, root_lo_, root_size_), &in))
+    if (path_->sign_chained(q, r.distance, certificate_tol(q, root_lo_, root_size_), &in))
       ++top_counters_.signs_chained;
     else
       in = inside_frame(q);

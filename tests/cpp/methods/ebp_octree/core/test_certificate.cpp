@@ -118,6 +118,41 @@ TEST(EbpCertificate, HapticPathsOnRealMeshesAreBitIdentical) {
   }
 }
 
+// The chained sign holds where the open balls about the previous point and the current one, of
+// their distances less the rounding bound, cover the step between them: no surface there, so the
+// same winding number at both ends.
+TEST(EbpCertificate, TheChainedSignHoldsWhereTheTwoEmptyBallsCoverTheStep) {
+  CertifiedPath path;
+  path.reset();
+  bool in = false;
+  EXPECT_FALSE(path.sign_chained({0, 0, 0}, 1.0, 0.0, &in)) << "nothing answered yet";
+  path.answered({0, 0, 0}, 1.0, true);
+  EXPECT_TRUE(path.sign_chained({0.9, 0, 0}, 0.0, 0.0, &in)) << "inside the previous ball alone";
+  EXPECT_TRUE(in);
+  EXPECT_TRUE(path.sign_chained({1.7, 0, 0}, 0.8, 0.0, &in)) << "the two balls cover the step";
+  EXPECT_FALSE(path.sign_chained({1.9, 0, 0}, 0.8, 0.0, &in)) << "a gap between the balls";
+  EXPECT_FALSE(path.sign_chained({1.7, 0, 0}, 0.8, 0.05, &in)) << "each ball less twice the rounding bound";
+  path.answered({0, 0, 0}, 0.0, false);  // a point on the surface chains nothing
+  EXPECT_FALSE(path.sign_chained({0.5, 0, 0}, 0.5, 0.0, &in));  // its distance is at most the step
+}
+
+// The harness's contact paths (a probe sliding within +-0.2 mm, crossing the surface again and
+// again, at 0.1 and 0.3 m/s): bit-identical answers, the sign chained on many queries.
+TEST(EbpCertificate, ContactPathsAreBitIdentical) {
+  for (const char* name : {"cow.obj", "stanford-bunny.obj"}) {
+    const Mesh m = bvhbench::load_mesh(shared_mesh(name));
+    const Octree t = build(m);
+    for (const double speed : {0.1, 0.3}) {
+      nlohmann::json meta;
+      const auto path = bvhbench::generate_queries(m, "contact", 3000, 1, {{"band_mm", 0.2}, {"slide_speed", speed}}, &meta);
+      const QueryCounters c = expect_certified_path(t, path, std::string(name) + " contact");
+      if (t.closed) {
+        EXPECT_GT(c.signs_chained, path.size() / 4) << name << " " << speed;
+      }
+    }
+  }
+}
+
 // The choice between certificates and plain searches (certificate_policy auto, the default): on
 // a slide (the harness's haptic path) certificates answer most queries; on a path that jumps
 // between two far places at every query, every certificate is lost at once, and plain streaks
