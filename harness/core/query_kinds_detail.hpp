@@ -91,7 +91,10 @@ class TriangleGrid {
   mutable std::uint64_t tested_ = 0;
   int cell_coord(double x, int axis) const;
   void cell_range(std::uint32_t t, int lo[3], int hi[3]) const;
+  std::size_t linear(int x, int y, int z) const;
   void fill(std::size_t slab_ids, Progress* progress);
+  void count_cells(Progress* progress);
+  void write_slab(std::size_t c0, std::size_t c1, std::vector<std::uint32_t>& slab, Progress* progress);
 };
 
 /// The fixed layout of a haptic path: every episode has `approach` samples coming in from free

@@ -99,12 +99,48 @@ void TriangleGrid::cell_range(std::uint32_t t, int lo[3], int hi[3]) const {
   }
 }
 
+std::size_t TriangleGrid::linear(int x, int y, int z) const { return (std::size_t(z) * n_[1] + y) * n_[0] + x; }
+
 // A pass to count each cell's triangles, then one pass per slab (a run of cells whose ids fit
 // `slab_ids`; in memory, one slab for all) to write their ids, in increasing order within each
 // cell. Each pass works out a triangle's cells from its corners again: nothing per vertex or per
 // triangle is kept between passes, so the build holds the offsets and one slab of ids alone.
 void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
-  auto linear = [&](int x, int y, int z) { return (std::size_t(z) * n_[1] + y) * n_[0] + x; };
+  count_cells(progress);
+  const std::size_t cells = num_cells();
+  std::vector<std::size_t> slab_end;  // slab k is cells [slab_end[k - 1], slab_end[k])
+  for (std::size_t c0 = 0; c0 < cells;) {
+    std::size_t c1 = c0 + 1;  // a cell fuller than a slab is a slab of its own
+    while (c1 < cells && offsets_[c1 + 1] - offsets_[c0] <= slab_ids) ++c1;
+    slab_end.push_back(c0 = c1);
+  }
+  slabs_ = slab_end.size();
+  const ScratchSpace* scratch = source_.scratch();
+  if (scratch)
+    paged_ids_ = std::make_unique<ScratchArray<std::uint32_t>>(scratch->dir, "triangle grid ids",
+                                                                scratch->budget_bytes / 16);
+  // Reserved once for the largest slab: growing it between slabs would hold two at once.
+  std::vector<std::uint32_t> slab;
+  std::uint32_t largest = 0;
+  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++])
+    largest = std::max(largest, offsets_[slab_end[k]] - offsets_[c0]);
+  slab.reserve(largest);
+  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++]) {
+    write_slab(c0, slab_end[k], slab, progress);
+    if (paged_ids_) paged_ids_->append(slab.data(), slab.size());
+  }
+  if (paged_ids_) {
+    paged_ids_->finish();
+  } else {
+    ids_ = std::move(slab);
+  }
+  // Every offset is now its cell's end: shifted by one, each is its cell's start again.
+  for (std::size_t c = cells; c > 0; --c) offsets_[c] = offsets_[c - 1];
+  offsets_[0] = 0;
+}
+
+// Each cell's count, then offsets_[c] = the start of cell c (offsets_[#cells] = all references).
+void TriangleGrid::count_cells(Progress* progress) {
   const std::size_t cells = num_cells();
   offsets_.assign(cells + 1, 0);
   const auto nt = std::uint32_t(source_.num_triangles());
@@ -119,54 +155,29 @@ void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
     if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000));
   }
   if (refs >= 0xffffffffull) throw InputError(source_.path() + ": too many triangle-cell pairs for the grid");
-  // offsets_[c] becomes the start of cell c; while a slab is filled, the offsets of its cells
-  // are their write cursors and end at the start of the next cell.
   std::uint32_t sum = 0;
   for (std::size_t c = 0; c < cells; ++c) sum += std::exchange(offsets_[c], sum);
   offsets_[cells] = sum;
-  const ScratchSpace* scratch = source_.scratch();
-  if (scratch)
-    paged_ids_ = std::make_unique<ScratchArray<std::uint32_t>>(scratch->dir, "triangle grid ids",
-                                                                scratch->budget_bytes / 16);
-  std::vector<std::size_t> slab_end;  // slab k is cells [slab_end[k - 1], slab_end[k])
-  for (std::size_t c0 = 0; c0 < cells;) {
-    std::size_t c1 = c0 + 1;  // a cell fuller than a slab is a slab of its own
-    while (c1 < cells && offsets_[c1 + 1] - offsets_[c0] <= slab_ids) ++c1;
-    slab_end.push_back(c0 = c1);
+}
+
+// The ids of cells [c0, c1) into `slab`, from one pass over the triangles. The offsets of those
+// cells are their write cursors: each ends at its cell's end (the next cell's start).
+void TriangleGrid::write_slab(std::size_t c0, std::size_t c1, std::vector<std::uint32_t>& slab, Progress* progress) {
+  const std::uint32_t base = offsets_[c0];
+  slab.assign(offsets_[c1] - base, 0);
+  const auto nt = std::uint32_t(source_.num_triangles());
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    int lo[3], hi[3];
+    cell_range(t, lo, hi);
+    if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000) / double(slabs_));
+    if (linear(hi[0], hi[1], hi[2]) < c0 || linear(lo[0], lo[1], lo[2]) >= c1) continue;
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const std::size_t c = linear(x, y, z);
+          if (c >= c0 && c < c1) slab[offsets_[c]++ - base] = t;
+        }
   }
-  slabs_ = slab_end.size();
-  // Reserved once for the largest slab: growing it between slabs would hold two at once.
-  std::vector<std::uint32_t> slab;
-  std::uint32_t largest = 0;
-  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++])
-    largest = std::max(largest, offsets_[slab_end[k]] - offsets_[c0]);
-  slab.reserve(largest);
-  for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++]) {
-    const std::size_t c1 = slab_end[k];
-    const std::uint32_t base = offsets_[c0];
-    slab.assign(offsets_[c1] - base, 0);
-    for (std::uint32_t t = 0; t < nt; ++t) {
-      int lo[3], hi[3];
-      cell_range(t, lo, hi);
-      if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000) / double(slab_end.size()));
-      if (linear(hi[0], hi[1], hi[2]) < c0 || linear(lo[0], lo[1], lo[2]) >= c1) continue;
-      for (int z = lo[2]; z <= hi[2]; ++z)
-        for (int y = lo[1]; y <= hi[1]; ++y)
-          for (int x = lo[0]; x <= hi[0]; ++x) {
-            const std::size_t c = linear(x, y, z);
-            if (c >= c0 && c < c1) slab[offsets_[c]++ - base] = t;
-          }
-    }
-    if (paged_ids_) paged_ids_->append(slab.data(), slab.size());
-  }
-  if (paged_ids_) {
-    paged_ids_->finish();
-  } else {
-    ids_ = std::move(slab);
-  }
-  // Every offset is now its cell's end: shifted by one, each is its cell's start again.
-  for (std::size_t c = cells; c > 0; --c) offsets_[c] = offsets_[c - 1];
-  offsets_[0] = 0;
 }
 
 bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
@@ -179,7 +190,7 @@ bool TriangleGrid::closest(const Vec3d& p, double r, Hit* hit) const {
   double best2 = std::numeric_limits<double>::infinity();
   bool found = false;
   auto scan = [&](int x, int y, int z) {
-    const std::size_t c = (std::size_t(z) * n_[1] + y) * n_[0] + x;
+    const std::size_t c = linear(x, y, z);
     for (std::uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) {
       const std::uint32_t t = paged_ids_ ? (*paged_ids_)[k] : ids_[k];
       const std::array<Vec3d, 3> v = source_.corners(t);
