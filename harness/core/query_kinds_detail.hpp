@@ -93,8 +93,13 @@ class TriangleGrid {
   void cell_range(std::uint32_t t, int lo[3], int hi[3]) const;
   std::size_t linear(int x, int y, int z) const;
   void fill(std::size_t slab_ids, Progress* progress);
-  void count_cells(Progress* progress);
-  void write_slab(std::size_t c0, std::size_t c1, std::vector<std::uint32_t>& slab, Progress* progress);
+  /// A triangle's first and last cell (linear indices: the corners of its range of cells).
+  struct CellSpan {
+    std::uint32_t first, last;
+  };
+  void count_cells(ScratchArray<CellSpan>* spans, Progress* progress);
+  void write_slab(std::size_t c0, std::size_t c1, const ScratchArray<CellSpan>* spans, std::vector<std::uint32_t>& slab,
+                  Progress* progress);
 };
 
 /// The fixed layout of a haptic path: every episode has `approach` samples coming in from free

@@ -106,7 +106,12 @@ std::size_t TriangleGrid::linear(int x, int y, int z) const { return (std::size_
 // cell. Each pass works out a triangle's cells from its corners again: nothing per vertex or per
 // triangle is kept between passes, so the build holds the offsets and one slab of ids alone.
 void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
-  count_cells(progress);
+  // Paged, every triangle's corners are three page look-ups: the count pass keeps each triangle's
+  // first and last cell (8 bytes) in a scratch file that the slab passes read in order instead.
+  const ScratchSpace* scratch = source_.scratch();
+  std::unique_ptr<ScratchArray<CellSpan>> spans;
+  if (scratch) spans = std::make_unique<ScratchArray<CellSpan>>(scratch->dir, "triangle grid spans", scratch->budget_bytes / 16);
+  count_cells(spans.get(), progress);
   const std::size_t cells = num_cells();
   std::vector<std::size_t> slab_end;  // slab k is cells [slab_end[k - 1], slab_end[k])
   for (std::size_t c0 = 0; c0 < cells;) {
@@ -115,7 +120,6 @@ void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
     slab_end.push_back(c0 = c1);
   }
   slabs_ = slab_end.size();
-  const ScratchSpace* scratch = source_.scratch();
   if (scratch)
     paged_ids_ = std::make_unique<ScratchArray<std::uint32_t>>(scratch->dir, "triangle grid ids",
                                                                 scratch->budget_bytes / 16);
@@ -126,9 +130,10 @@ void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
     largest = std::max(largest, offsets_[slab_end[k]] - offsets_[c0]);
   slab.reserve(largest);
   for (std::size_t k = 0, c0 = 0; k < slab_end.size(); c0 = slab_end[k++]) {
-    write_slab(c0, slab_end[k], slab, progress);
+    write_slab(c0, slab_end[k], spans.get(), slab, progress);
     if (paged_ids_) paged_ids_->append(slab.data(), slab.size());
   }
+  spans.reset();  // before the ids' cache comes
   if (paged_ids_) {
     paged_ids_->finish();
   } else {
@@ -140,7 +145,8 @@ void TriangleGrid::fill(std::size_t slab_ids, Progress* progress) {
 }
 
 // Each cell's count, then offsets_[c] = the start of cell c (offsets_[#cells] = all references).
-void TriangleGrid::count_cells(Progress* progress) {
+// `spans`, if given, gets every triangle's first and last cell, in triangle order.
+void TriangleGrid::count_cells(ScratchArray<CellSpan>* spans, Progress* progress) {
   const std::size_t cells = num_cells();
   offsets_.assign(cells + 1, 0);
   const auto nt = std::uint32_t(source_.num_triangles());
@@ -148,6 +154,7 @@ void TriangleGrid::count_cells(Progress* progress) {
   for (std::uint32_t t = 0; t < nt; ++t) {
     int lo[3], hi[3];
     cell_range(t, lo, hi);
+    if (spans) spans->push_back({std::uint32_t(linear(lo[0], lo[1], lo[2])), std::uint32_t(linear(hi[0], hi[1], hi[2]))});
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) ++offsets_[linear(x, y, z)];
@@ -155,6 +162,7 @@ void TriangleGrid::count_cells(Progress* progress) {
     if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000));
   }
   if (refs >= 0xffffffffull) throw InputError(source_.path() + ": too many triangle-cell pairs for the grid");
+  if (spans) spans->finish();
   std::uint32_t sum = 0;
   for (std::size_t c = 0; c < cells; ++c) sum += std::exchange(offsets_[c], sum);
   offsets_[cells] = sum;
@@ -162,15 +170,29 @@ void TriangleGrid::count_cells(Progress* progress) {
 
 // The ids of cells [c0, c1) into `slab`, from one pass over the triangles. The offsets of those
 // cells are their write cursors: each ends at its cell's end (the next cell's start).
-void TriangleGrid::write_slab(std::size_t c0, std::size_t c1, std::vector<std::uint32_t>& slab, Progress* progress) {
+void TriangleGrid::write_slab(std::size_t c0, std::size_t c1, const ScratchArray<CellSpan>* spans,
+                              std::vector<std::uint32_t>& slab, Progress* progress) {
   const std::uint32_t base = offsets_[c0];
   slab.assign(offsets_[c1] - base, 0);
   const auto nt = std::uint32_t(source_.num_triangles());
+  const std::size_t row = std::size_t(n_[0]), layer = row * std::size_t(n_[1]);
   for (std::uint32_t t = 0; t < nt; ++t) {
-    int lo[3], hi[3];
-    cell_range(t, lo, hi);
     if (progress && (t & 0xfffff) == 0) progress->add(double(0x100000) / double(slabs_));
-    if (linear(hi[0], hi[1], hi[2]) < c0 || linear(lo[0], lo[1], lo[2]) >= c1) continue;
+    int lo[3], hi[3];
+    if (spans) {
+      const CellSpan span = (*spans)[t];
+      if (span.last < c0 || span.first >= c1) continue;
+      auto cell_of = [&](std::size_t c, int xyz[3]) {
+        xyz[0] = int(c % row);
+        xyz[1] = int(c % layer / row);
+        xyz[2] = int(c / layer);
+      };
+      cell_of(span.first, lo);
+      cell_of(span.last, hi);
+    } else {
+      cell_range(t, lo, hi);
+      if (linear(hi[0], hi[1], hi[2]) < c0 || linear(lo[0], lo[1], lo[2]) >= c1) continue;
+    }
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
