@@ -39,6 +39,11 @@ template <class T> constexpr Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
 }
 template <class T> inline T norm(const Vec3<T>& a) { return std::sqrt(dot(a, a)); }
 template <class T> constexpr T squared_norm(const Vec3<T>& a) { return dot(a, a); }
+/// The sum of triangle (a, b, c)'s edge lengths, in one order: every mean edge length (a loaded
+/// mesh's, a paged one's, the EBP-Octree's frame) adds it, so they are the same double.
+template <class T> inline T perimeter(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c) {
+  return norm(b - a) + norm(c - b) + norm(a - c);
+}
 template <class T> inline Vec3<T> normalized(const Vec3<T>& a) {
   T n = norm(a);
   return n > T(0) ? a / n : Vec3<T>{};

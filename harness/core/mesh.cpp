@@ -18,7 +18,7 @@ double Mesh::average_edge_length() const {
     const Vec3d& a = vertices[t[0]];
     const Vec3d& b = vertices[t[1]];
     const Vec3d& c = vertices[t[2]];
-    sum += norm(b - a) + norm(c - b) + norm(a - c);
+    sum += perimeter(a, b, c);
   }
   return sum / (3.0 * double(triangles.size()));
 }

@@ -20,8 +20,7 @@ PagedTriangles::PagedTriangles(MeshReader& reader, ScratchSpace scratch)
   reader.read_triangles([&](std::uint64_t, const Triangle* t, std::size_t n) {
     triangles_.append(t, n);
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec3d a = vertices_[t[i][0]], b = vertices_[t[i][1]], c = vertices_[t[i][2]];
-      edges += norm(b - a) + norm(c - b) + norm(a - c);
+      edges += perimeter(vertices_[t[i][0]], vertices_[t[i][1]], vertices_[t[i][2]]);
     }
   });
   triangles_.finish();

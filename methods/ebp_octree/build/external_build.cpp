@@ -94,7 +94,7 @@ FrameScan scan_frame(TriangleSource& src, tbb::task_arena& arena, const ExtBuild
           const float* v = xyz + 9 * i;
           const Vec3d a{v[0], v[1], v[2]}, b{v[3], v[4], v[5]}, c{v[6], v[7], v[8]};
           bb.add(a); bb.add(b); bb.add(c);
-          edge[i] = norm(b - a) + norm(c - b) + norm(a - c);
+          edge[i] = perimeter(a, b, c);
           if (check_closed)
             for (int k = 0; k < 3; ++k) {
               const std::uint64_t u = idx[3 * i + std::size_t(k)], w = idx[3 * i + std::size_t((k + 1) % 3)];

@@ -32,7 +32,7 @@ Vec3d choose_origin(const Box3d& b) {
 
 void FrameAccumulator::add(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   bb.add(a); bb.add(b); bb.add(c);
-  edge_sum += norm(b - a) + norm(c - b) + norm(a - c);
+  edge_sum += perimeter(a, b, c);
   ++triangles;
 }
 
