@@ -63,8 +63,9 @@ int TriangleGrid::cell_coord(double x, int axis) const {
 TriangleGrid::TriangleGrid(const TriangleSource& source, double min_cell, std::size_t max_cells, Progress* progress)
     : source_(source) {
   const ScratchSpace* scratch = source.scratch();
-  // Paged: the offsets take a sixteenth of the budget, the cache of ids another, a slab of ids
-  // being filled a quarter (the source's own caches hold the rest).
+  // Paged: the offsets take a sixteenth of the budget, a slab of ids being filled a quarter and
+  // the cells of each triangle, kept for the slab passes, a sixteenth; once those are gone, the
+  // cache of ids a sixteenth (the source's own caches hold the rest).
   if (scratch) max_cells = std::max<std::size_t>(1, std::min(max_cells, scratch->budget_bytes / 16 / sizeof(std::uint32_t)));
   Box3d box = source.summary().bounds;
   if (box.empty() || source.num_triangles() == 0)

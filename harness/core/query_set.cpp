@@ -58,17 +58,16 @@ const QueryKind& query_kind(const std::string& name) {
 
 namespace {
 
-/// The sidecar of a generated set (query_set_io.hpp writes it beside the points), on the mesh
-/// of that path, sha256 and triangle count.
-nlohmann::json sidecar(const std::string& mesh_path, const std::string& mesh_sha256, std::uint64_t mesh_triangles,
-                       const QueryKind& k, std::size_t n, std::uint64_t seed, const Params& params) {
+/// The sidecar of a generated set (query_set_io.hpp writes it beside the points).
+nlohmann::json sidecar(const MeshSummary& mesh, const QueryKind& k, std::size_t n, std::uint64_t seed,
+                       const Params& params) {
   nlohmann::json m;
   m["kind"] = k.name;
   m["n"] = n;
   m["seed"] = seed;
-  m["mesh_sha256"] = mesh_sha256;
-  m["mesh_path"] = mesh_path;
-  m["mesh_triangles"] = mesh_triangles;
+  m["mesh_sha256"] = mesh.sha256;
+  m["mesh_path"] = mesh.path;
+  m["mesh_triangles"] = mesh.triangles;
   m["ordered"] = k.ordered;
   m["params"] = query_param_values(k, params);
   m["created_by"] = "bvhbench queries";
@@ -90,8 +89,7 @@ std::vector<Vec3d> generate_queries(const TriangleSource& mesh, const std::strin
   const QueryKind& k = query_kind(kind);
   const Params params = query_kind_params(k, given_params);
   auto pts = k.generate(mesh, n, seed, params);
-  const MeshSummary& s = mesh.summary();
-  if (meta) *meta = sidecar(s.path, s.sha256, s.triangles, k, pts.size(), seed, params);
+  if (meta) *meta = sidecar(mesh.summary(), k, pts.size(), seed, params);
   return pts;
 }
 
@@ -102,7 +100,7 @@ std::vector<Vec3d> generate_queries(const MeshSummary& mesh, const std::string& 
   if (!k.generate_in_box) throw std::logic_error("query kind '" + kind + "' needs the mesh, not its summary");
   const Params params = query_kind_params(k, given_params);
   auto pts = k.generate_in_box(mesh.bounds, n, seed, params);
-  if (meta) *meta = sidecar(mesh.path, mesh.sha256, mesh.triangles, k, pts.size(), seed, params);
+  if (meta) *meta = sidecar(mesh, k, pts.size(), seed, params);
   return pts;
 }
 

@@ -39,9 +39,6 @@ class PagedTriangles final : public TriangleSource {
   double average_edge_length() const override { return average_edge_length_; }
   const ScratchSpace* scratch() const override { return &scratch_; }
 
-  /// The caches' bytes (what this holds in memory).
-  std::size_t resident_bytes() const { return vertices_.resident_bytes() + triangles_.resident_bytes(); }
-
  private:
   ScratchSpace scratch_;
   MeshSummary summary_;

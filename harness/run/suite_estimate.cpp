@@ -35,7 +35,7 @@ constexpr double kOracleSecondsPerTriangle = 6e-7;
 constexpr double kOracleSecondsPerQueryLog = 2e-6;
 constexpr double kQueryGenSecondsPerPoint = 2e-6;
 // A probe path's (haptic, contact) triangle grid, per triangle, beyond the load: two passes over
-// the triangles in memory, more when the mesh is paged (the 128M model: 43 s loaded, 64 s paged).
+// the triangles in memory, more when the mesh is paged (the 128M model: 43 s loaded, 53 s paged).
 constexpr double kProbeGridSecondsPerTriangle = 2.5e-7;
 // Where no method has run at all: a build per triangle x log2 triangles, a query.
 constexpr double kBuildSecondsPerTriangleLog = 4e-8;
