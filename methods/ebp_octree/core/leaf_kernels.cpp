@@ -158,6 +158,21 @@ unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3]
   return keep;
 }
 
+std::uint64_t column_box_pass_baseline(const float* const lo[3], const float* const hi[3], std::uint32_t n,
+                                       const float q_lo[3], const float q_hi[3], float box_lim, float* g2) {
+  std::uint64_t within = 0;
+  for (std::uint32_t j = 0; j < (n + 7) / 8 * 8; ++j) {
+    float sum = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float g = std::max(std::max(lo[a][j] - q_hi[a], q_lo[a] - hi[a][j]), 0.0f);
+      sum = sum + g * g;
+    }
+    g2[j] = sum;
+    if (j < n && sum <= box_lim) within |= std::uint64_t(1) << j;
+  }
+  return within;
+}
+
 void box_distances_baseline(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2) {
   for (std::uint32_t j = 0; j < n; ++j) d2[j] = box_d2(boxes[j], p);
 }
@@ -345,6 +360,29 @@ EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float
   return ~out & low_bits(m);
 }
 
+EBP_AVX2 std::uint64_t column_box_pass_avx2(const float* const lo[3], const float* const hi[3], std::uint32_t n,
+                                            const float q_lo[3], const float q_hi[3], float box_lim, float* g2) {
+  __m256 QLO[3], QHI[3];
+  for (int a = 0; a < 3; ++a) {
+    QLO[a] = _mm256_set1_ps(q_lo[a]);
+    QHI[a] = _mm256_set1_ps(q_hi[a]);
+  }
+  const __m256 LIM = _mm256_set1_ps(box_lim);
+  std::uint64_t within = 0;
+  for (std::uint32_t j = 0; j < n; j += 8) {
+    __m256 sum = _mm256_setzero_ps();
+    for (int a = 0; a < 3; ++a) {
+      const __m256 g = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_load_ps(lo[a] + j), QHI[a]),
+                                                   _mm256_sub_ps(QLO[a], _mm256_load_ps(hi[a] + j))),
+                                     _mm256_setzero_ps());
+      sum = _mm256_add_ps(sum, _mm256_mul_ps(g, g));
+    }
+    _mm256_storeu_ps(g2 + j, sum);
+    within |= std::uint64_t(unsigned(_mm256_movemask_ps(_mm256_cmp_ps(sum, LIM, _CMP_LE_OQ)))) << j;
+  }
+  return n >= 64 ? within : within & ((std::uint64_t(1) << n) - 1);
+}
+
 EBP_AVX2 inline __m256d abs_pd(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
 
 EBP_AVX2 unsigned block_pass_avx2(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
@@ -438,12 +476,12 @@ EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[
 LeafKernelTable make(LeafKernels k) {
 #if defined(EBP_X86)
   if (k == LeafKernels::avx2 && cpu_has_avx2())
-    return {plane_pass_avx2,    box_pass_avx2,      block_pass_avx2,   box_distances_avx2,
-            edge_signs_avx2,    distance_pass_avx2, LeafKernels::avx2};
+    return {plane_pass_avx2,    box_pass_avx2,      block_pass_avx2,        box_distances_avx2,
+            edge_signs_avx2,    distance_pass_avx2, column_box_pass_avx2, LeafKernels::avx2};
 #endif
   (void)k;
-  return {plane_pass_baseline, box_pass_baseline,      block_pass_baseline, box_distances_baseline,
-          edge_signs_baseline, distance_pass_baseline, LeafKernels::baseline};
+  return {plane_pass_baseline, box_pass_baseline,      block_pass_baseline,        box_distances_baseline,
+          edge_signs_baseline, distance_pass_baseline, column_box_pass_baseline, LeafKernels::baseline};
 }
 
 LeafKernelTable& current() {
@@ -478,7 +516,7 @@ const LeafKernelTable& leaf_kernel_table() { return current(); }
 void distance_prefilter_limits(double best, double best2, double eps_p, float* plane_lim, float* box_lim) {
   float lo;
   float_bounds((best + eps_p) * (1 + 1e-9), &lo, plane_lim);
-  float_bounds(best2 * (1 + 4e-6), &lo, box_lim);
+  float_bounds(box_prefilter_limit(best2), &lo, box_lim);
 }
 
 }  // namespace ebp

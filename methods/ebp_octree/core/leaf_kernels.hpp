@@ -109,11 +109,23 @@ struct LeafKernelTable {
   /// the best has moved, without evaluating them again.
   unsigned (*distance_pass)(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
                             const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8], float box_d2[8]);
+  /// distance_pass's box value over n <= 64 boxes given as columns (lo[a][j], hi[a][j]; 32-byte
+  /// aligned, readable and padded with empty boxes, lo +inf and hi -inf, up to n rounded up to 8):
+  /// writes g2[j] = ((0 + g0 g0) + g1 g1) + g2 g2 in float, g_a = max(max(lo_a - q_hi_a,
+  /// q_lo_a - hi_a), 0), for every j below n rounded up to 8, and returns the bit mask of the j < n
+  /// with g2[j] <= box_lim. A near set's members, before its served search (near_set.hpp).
+  std::uint64_t (*column_box_pass)(const float* const lo[3], const float* const hi[3], std::uint32_t n,
+                                   const float q_lo[3], const float q_hi[3], float box_lim, float* g2);
   LeafKernels kind;
 };
 
 /// The kernels in use.
 const LeafKernelTable& leaf_kernel_table();
+
+/// The limit on distance_pass's box value for a running best distance whose square is best2:
+/// a box value above it (or above it rounded up to float) is strictly farther than the best.
+/// The margin covers the float rounding of the box sum (< 3e-7 relative).
+inline double box_prefilter_limit(double best2) { return best2 * (1 + 4e-6); }
 
 /// distance_pass's limits for a running best distance `best` (its square best2) and the leaf's
 /// face-plane error bound at p, eps_p: plane_lim >= (best + eps_p)(1 + 1e-9), box_lim >= best2

@@ -92,13 +92,19 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
     n = 0;
     return false;
   }
-  for (std::uint32_t j = n; j % 4 != 0; ++j)  // padding: empty boxes
+  for (std::uint32_t j = n; j % 8 != 0; ++j)  // padding: empty boxes
     for (int a = 0; a < 3; ++a) {
       blo[a][j] = std::numeric_limits<float>::infinity();
       bhi[a][j] = -std::numeric_limits<float>::infinity();
     }
   valid = true;
   return true;
+}
+
+std::uint64_t NearSet::within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax]) const {
+  const float* const lo[3] = {blo[0], blo[1], blo[2]};
+  const float* const hi[3] = {bhi[0], bhi[1], bhi[2]};
+  return leaf_kernel_table().column_box_pass(lo, hi, n, q_lo, q_hi, box_lim, g2);
 }
 
 }  // namespace ebp

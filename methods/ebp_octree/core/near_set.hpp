@@ -1,7 +1,7 @@
 #pragma once
 /// The triangles near a coherent path (DESIGN.md, "Near sets"): every triangle whose float
 /// bounding box meets a float box [lo, hi], gathered from the grey leaves whose closed cells meet
-/// the box, each input triangle once, with its box (SoA, padded to 4 with empty boxes). Any
+/// the box, each input triangle once, with its box (SoA, padded to 8 with empty boxes). Any
 /// triangle that meets [lo, hi] is in the set (the distribution lists a triangle in every leaf
 /// whose closed cell it touches, and no triangle touches an empty node), which is what makes
 /// the set a certificate for whatever lies in its box:
@@ -21,9 +21,9 @@ struct NearSet {
   bool valid = false;
   bool overflowed = false;  ///< the last gather failed because more than kNearMax triangles meet its box
   float lo[3], hi[3];
-  std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 4) hold empty boxes
-  alignas(16) float blo[3][kNearMax];
-  alignas(16) float bhi[3][kNearMax];
+  std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 8) hold empty boxes
+  alignas(32) float blo[3][kNearMax];
+  alignas(32) float bhi[3][kNearMax];
   std::uint32_t k[kNearMax];     ///< LeafTri index
   std::uint32_t leaf[kNearMax];  ///< the leaf it was gathered from
   std::uint32_t node[kNearMax];  ///< and that leaf's node
@@ -32,6 +32,14 @@ struct NearSet {
   bool holds(const float f0[3], const float f1[3]) const {
     return valid && lo[0] <= f0[0] && lo[1] <= f0[1] && lo[2] <= f0[2] && f1[0] <= hi[0] && f1[1] <= hi[1] &&
            f1[2] <= hi[2];
+  }
+
+  /// Whether the cube about p of half-width r, its faces p +- r computed in double, lies in the
+  /// set's box: it then holds the ball (p, r - e) for any e above the rounding of p +- r (the
+  /// distance search's tol).
+  bool holds_cube(const Vec3d& p, double r) const {
+    return valid && double(lo[0]) <= p.x - r && double(lo[1]) <= p.y - r && double(lo[2]) <= p.z - r &&
+           p.x + r <= double(hi[0]) && p.y + r <= double(hi[1]) && p.z + r <= double(hi[2]);
   }
 
   /// Gathers the set of [glo, ghi] (rounded outwards to float). The box must lie in the union of
@@ -46,7 +54,14 @@ struct NearSet {
   /// stops early (returning false) when f returns false.
   template <class F>
   bool for_each_meeting(const float f0[3], const float f1[3], F&& f) const;
+
+  /// The distance search's box pre-filter over every member at once (leaf_kernels.hpp,
+  /// column_box_pass): writes each member's box value from [q_lo, q_hi] to g2 and returns the
+  /// bit mask (bit j: member j) of those within box_lim.
+  std::uint64_t within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax]) const;
 };
+
+static_assert(kNearMax % 8 == 0 && kNearMax <= 64, "members padded to 8 in columns; one bit each in a 64-bit mask");
 
 }  // namespace ebp
 

@@ -159,35 +159,33 @@ class Query::DistanceSearch {
            nodes[s.seed_node].kind == NodeKind::leaf && nodes[s.seed_node].index == s.seed_leaf;
   }
 
-  /// The near start (after seed_triangle): when the box of the ball (p, best + tol), rounded
-  /// outwards to float, lies in the near set's box, every triangle within best of p is a member
-  /// (near_set.hpp), so the members whose boxes meet the ball's box, in set order, are the
-  /// whole search: no leaf scan, no descent. Returns false (nothing done) otherwise.
+  /// The near start (after seed_triangle): when the cube about p of half-width best + tol lies
+  /// in the near set's box (tol covers the rounding of its faces), every triangle within best of
+  /// p is a member (near_set.hpp), so the members whose boxes are within the best of p, in set
+  /// order, are the whole search: no leaf scan, no descent. Returns false (nothing done)
+  /// otherwise.
   bool near_start(const NearSet& ns) {
-    if (!ns.valid || !(B.best < std::numeric_limits<double>::infinity())) return false;
-    const double r = B.best + tol;
-    const float f0[3] = {float_down(p.x - r), float_down(p.y - r), float_down(p.z - r)};
-    const float f1[3] = {float_up(p.x + r), float_up(p.y + r), float_up(p.z + r)};
-    if (!ns.holds(f0, f1)) return false;
+    if (!(B.best < std::numeric_limits<double>::infinity()) || !ns.holds_cube(p, B.best + tol)) return false;
     // The seed gave a tight bound (seed_triangle runs first), so the members are taken in set
     // order, each one whose box is within the running limit tested at once: sorting them by box
-    // distance first cost more than the few extra exact tests it saved. The set lists each input
+    // distance first cost more than the few extra exact tests it saved. The members' boxes go
+    // through the leaf scan's box pre-filter (float, with its margin: a member it prunes is
+    // strictly farther than the best), all of them in one pass, and each survivor's value is
+    // compared again with the limit of the best when its turn comes. The set lists each input
     // triangle once, and a served search tests nothing before it but the seed: the members need
     // no once-per-query stamp, only the seed's exclusion.
     const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
-    ns.for_each_meeting(f0, f1, [&](std::uint32_t j) {
-      double d2 = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double v = std::max({double(ns.blo[a][j]) - p[a], 0.0, p[a] - double(ns.bhi[a][j])});
-        d2 += v * v;
-      }
-      if (d2 > lim2) return true;  // lim2 follows the best down
+    point_bounds();
+    float g2[kNearMax];
+    for (std::uint64_t bits = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2); bits;
+         bits &= bits - 1) {
+      const unsigned j = unsigned(__builtin_ctzll(bits));
+      if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
       const LeafTri& t = tris[ns.k[j]];
-      if (t.tri() == seed) return true;
+      if (t.tri() == seed) continue;
       scan_node = ns.node[j];
       evaluate(t, ns.k[j], ns.leaf[j]);
-      return true;
-    });
+    }
     ++counters.near_served;
     counters.near_tested += ns.n;
     return true;
@@ -285,10 +283,7 @@ class Query::DistanceSearch {
     // extra term, or they could lose their closest triangle.
     const double eps_p = double(lf.eps) + kPlaneEpsGrowth * (double(std::fabs(px)) + double(std::fabs(py)) +
                                                               double(std::fabs(pz)));
-    if (!q_bounds_) {  // once per search, and only for a search that scans a leaf (a page's often does not)
-      for (int a = 0; a < 3; ++a) float_bounds(p[a], &q_lo[a], &q_hi[a]);
-      q_bounds_ = true;
-    }
+    point_bounds();
     const LeafPoint lp{li, lf, {px, py, pz}, eps_p};
     // With no bound yet (the first leaf of a search without a seed), one pass of box distances,
     // then the block whose box is nearest p first: its triangles give a bound, so that the
@@ -361,6 +356,14 @@ class Query::DistanceSearch {
       if (plane_abs[i] > plane_lim_ || box_d2[i] > box_lim_) continue;
       test_triangle(k0 + i, lp.li);
     }
+  }
+
+  /// q_lo, q_hi: once per search, and only for a search that tests boxes by them (a page's
+  /// search often does not).
+  void point_bounds() {
+    if (q_bounds_) return;
+    for (int a = 0; a < 3; ++a) float_bounds_near(p[a], &q_lo[a], &q_hi[a]);
+    q_bounds_ = true;
   }
 
   /// The pre-filter's limits (distance_prefilter_limits) for the best as it is now and the
@@ -586,7 +589,7 @@ class Query::DistanceSearch {
   double tol = 0;
   double lim2 = std::numeric_limits<double>::infinity();  ///< (best + tol)^2
   float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
-  float q_lo[3], q_hi[3];        ///< p rounded outwards to float (the triangle pre-filter's boxes)
+  float q_lo[3], q_hi[3];        ///< floats about p, within 2 ulps (the triangle pre-filter's boxes)
   bool q_bounds_ = false;        ///< q_lo, q_hi computed
   // the triangle pre-filter's limits (distance_prefilter_limits), for the best and the leaf
   // (eps_p) they were computed for

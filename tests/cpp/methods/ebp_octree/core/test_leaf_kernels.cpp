@@ -331,9 +331,6 @@ TEST(EbpLeafKernels, DistancePrefilterClearsOnlyTrianglesFartherThanTheBest) {
   if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
 }
 
-// Inside answers and every counter are the same with either kernel, coherent or not, on closed
-// meshes, an open one, and stress-style meshes (duplicated faces, zero-area faces, nested shells
-// of both orientations); off the surface the answers are the oracle's on the closed ones.
 TEST(EbpLeafKernels, FloatBoundsAreTheNearestFloatsOutwards) {
   // float_bounds steps on the float's bits: the same as std::nextafter towards -+infinity where
   // rounding went the other way, at zero, subnormals, the largest finite float and beyond.
@@ -359,6 +356,103 @@ TEST(EbpLeafKernels, FloatBoundsAreTheNearestFloatsOutwards) {
   }
 }
 
+// float_bounds_near, the branch-free bounds about a query point: lo <= x <= hi always, at most
+// three floats outside float_bounds' tightest ones, on the same values.
+TEST(EbpLeafKernels, NearFloatBoundsHoldTheValueWithinThreeFloats) {
+  const float fmax = std::numeric_limits<float>::max(), tiny = std::numeric_limits<float>::denorm_min();
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<double> xs = {0.0, -0.0, 1e-300, -1e-300, 1e-45, -1e-45, double(tiny), -double(tiny), 1e-40, 0.1,
+                            -0.1, 1.0 / 3, -1.0 / 3, 1.0, 1e30, -1e30, double(fmax), -double(fmax),
+                            double(fmax) * (1 + 1e-12), -double(fmax) * 1.5, 1e300, -1e300,
+                            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 20000; ++i) xs.push_back(u(rng) * std::pow(10.0, int(rng() % 90) - 45));
+  for (int i = 0; i < 2000; ++i) xs.push_back(double(float(u(rng))));  // floats themselves
+  std::size_t looser = 0;
+  for (double x : xs) {
+    float lo, hi, tight_lo, tight_hi;
+    float_bounds_near(x, &lo, &hi);
+    float_bounds(x, &tight_lo, &tight_hi);
+    ASSERT_LE(double(lo), x) << x;
+    ASSERT_GE(double(hi), x) << x;
+    float floor = tight_lo, ceiling = tight_hi;
+    for (int step = 0; step < 3; ++step) {
+      floor = std::nextafter(floor, -inf);
+      ceiling = std::nextafter(ceiling, inf);
+    }
+    ASSERT_GE(lo, floor) << x;
+    ASSERT_LE(hi, ceiling) << x;
+    looser += lo != tight_lo || hi != tight_hi;
+  }
+  EXPECT_GT(looser, xs.size() / 4);  // it is the cheaper bound, not float_bounds again
+}
+
+// The near set's pre-filter kernel: every kernel gives the spelled-out box values, bit for bit,
+// over whole columns (the padding's empty boxes included) and the same mask, with no bit at or
+// beyond n, for set sizes from 0 to 64, query boxes inside, touching and away from the boxes,
+// and limits from 0 to beyond every value.
+TEST(EbpLeafKernels, ColumnBoxPassGivesTheSpelledOutBits) {
+  KernelsGuard g;
+  std::vector<LeafKernels> kinds{LeafKernels::baseline};
+  if (cpu_has_avx2()) kinds.push_back(LeafKernels::avx2);
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<float> U(-1, 1);
+  alignas(32) float lo[3][64], hi[3][64];
+  std::size_t within = 0, outside = 0;
+  for (std::uint32_t n : {0u, 1u, 3u, 7u, 8u, 9u, 31u, 33u, 63u, 64u}) {
+    for (int round = 0; round < 50; ++round) {
+      const std::uint32_t padded = (n + 7) / 8 * 8;
+      for (std::uint32_t j = 0; j < 64; ++j)
+        for (int a = 0; a < 3; ++a) {
+          const float x = U(rng), y = U(rng);
+          lo[a][j] = j < n ? std::min(x, y) : std::numeric_limits<float>::infinity();
+          hi[a][j] = j < n ? std::max(x, y) : -std::numeric_limits<float>::infinity();
+        }
+      float q_lo[3], q_hi[3];
+      for (int a = 0; a < 3; ++a) {
+        // a point box, or a box corner (a zero gap on that axis), or a wider box
+        const float c = (round % 3 == 1 && n > 0) ? hi[a][rng() % n] : U(rng) * 1.5f;
+        q_lo[a] = c;
+        q_hi[a] = round % 3 == 2 ? c + 0.1f : c;
+      }
+      float want[64];
+      for (std::uint32_t j = 0; j < padded; ++j) {
+        float sum = 0;
+        for (int a = 0; a < 3; ++a) {
+          const float gap = std::max(std::max(lo[a][j] - q_hi[a], q_lo[a] - hi[a][j]), 0.0f);
+          sum = sum + gap * gap;
+        }
+        want[j] = sum;
+      }
+      const float median = n > 0 ? want[rng() % n] : 0.0f;
+      for (float box_lim : {0.0f, median, std::numeric_limits<float>::max()}) {
+        std::uint64_t want_mask = 0;
+        for (std::uint32_t j = 0; j < n; ++j)
+          if (want[j] <= box_lim) want_mask |= std::uint64_t(1) << j;
+        within += std::uint64_t(__builtin_popcountll(want_mask));
+        outside += n - std::uint64_t(__builtin_popcountll(want_mask));
+        const float* const L[3] = {lo[0], lo[1], lo[2]};
+        const float* const H[3] = {hi[0], hi[1], hi[2]};
+        for (LeafKernels kind : kinds) {
+          set_leaf_kernels(kind);
+          float g2[64];
+          std::fill(g2, g2 + 64, -1.0f);
+          ASSERT_EQ(leaf_kernel_table().column_box_pass(L, H, n, q_lo, q_hi, box_lim, g2), want_mask)
+              << "kernel " << int(kind) << " n " << n;
+          ASSERT_EQ(0, std::memcmp(g2, want, padded * sizeof(float))) << "kernel " << int(kind) << " n " << n;
+        }
+      }
+    }
+  }
+  EXPECT_GT(within, 1000u);
+  EXPECT_GT(outside, 1000u);
+  if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
+}
+
+// Inside answers and every counter are the same with either kernel, coherent or not, on closed
+// meshes, an open one, and stress-style meshes (duplicated faces, zero-area faces, nested shells
+// of both orientations); off the surface the answers are the oracle's on the closed ones.
 TEST(EbpLeafKernels, InsideIsTheSameWithEitherKernel) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   for (const char* name : {"cow.obj", "fandisk.obj", "rocker-arm.obj", "spot.obj"})
