@@ -21,7 +21,7 @@
 namespace bvhbench {
 
 // ---------------------------------------------------------------------------------------------
-// `bvhbench suite SUITE.yml --out results/NAME [--resume] [--filter REGEX]
+// `bvhbench suite SUITE.yml --out results/NAME [--resume] [--filter REGEX] [--rounds N]
 //                  [--executor local|dask [--scheduler ADDRESS]]`
 // ---------------------------------------------------------------------------------------------
 namespace {
@@ -32,6 +32,7 @@ struct SuiteOpts {
   bool resume = false, list = false, json = false, no_truth = false, estimate = false;
   double timeout_s = -1, memory_limit_mb = -1;
   int repeat = -1;
+  int rounds = -1;
 };
 
 void add_suite_options(CLI::App* cmd, SuiteOpts& o) {
@@ -52,6 +53,10 @@ void add_suite_options(CLI::App* cmd, SuiteOpts& o) {
   cmd->add_option("--timeout", o.timeout_s, "Per-job time limit in seconds (overrides the suite)");
   cmd->add_option("--memory-limit", o.memory_limit_mb, "Per-job address-space limit in MiB (overrides the suite)");
   cmd->add_option("--repeat", o.repeat, "Timed passes per job (overrides the suite)");
+  cmd->add_option("--rounds", o.rounds,
+                  "Times every job is run, round after round over the whole suite, keeping each job's round of the "
+                  "highest median throughput (overrides the suite's rounds:; suites/README.md)")
+      ->check(CLI::Range(1, kMaxSuiteRounds));
   cmd->add_flag("--no-truth", o.no_truth, "Do not compute or attach oracle answers");
   cmd->add_option("--data", o.data_dir, "Cache for query sets and oracle files (default: OUT/data)");
   cmd->add_option("--executor", o.executor,
@@ -76,6 +81,7 @@ SuiteConfig load_with_overrides(const SuiteOpts& o) {
   if (o.timeout_s > 0) cfg.timeout_s = o.timeout_s;
   if (o.memory_limit_mb >= 0) cfg.memory_limit_mb = o.memory_limit_mb;
   if (o.repeat > 0) cfg.repeat = o.repeat;
+  if (o.rounds > 0) cfg.rounds = o.rounds;
   if (o.no_truth) cfg.truth = false;
   return cfg;
 }
@@ -98,9 +104,13 @@ void run_suite_command(const SuiteOpts& o) {
   const SuiteConfig cfg = load_with_overrides(o);
   const std::vector<JobPlan> jobs = filtered_jobs(cfg, o.filter);
   if (o.list) {
-    if (o.json) std::cout << suite_jobs_json(cfg, jobs).dump(1) << "\n";
-    else
-      for (auto& j : jobs) std::cout << j.id << "\n";
+    if (o.json) {
+      std::cout << suite_jobs_json(cfg, jobs).dump(1) << "\n";
+      return;
+    }
+    for (auto& j : jobs) std::cout << j.id << "\n";
+    // Beside the ids, which tools read from stdout one per line.
+    if (cfg.rounds > 1) std::cerr << "suite " << cfg.name << ": each job runs in " << cfg.rounds << " rounds\n";
     return;
   }
   if (o.json && !o.estimate) throw InputError("--json goes with --list or --estimate");

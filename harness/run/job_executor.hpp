@@ -32,11 +32,15 @@ namespace bvhbench {
 /// One job, ready to run: its query set and oracle exist (suite_data.hpp).
 struct JobTask {
   std::size_t index = 0;             ///< its place among the jobs of this invocation
+  /// The suite's round it runs in (1-based; suite_rounds.hpp), whose files are its paths below. A
+  /// round is collected whole before the next is submitted, so `index` stays unique among the
+  /// tasks pending.
+  int round = 1;
   JobPlan plan;
   JobSpec spec;                      ///< what `bvhbench run` gets (method text, paths, repeat)
   ChildLimits limits;
-  std::string child_result_path;     ///< runs/ID.json.child: where a child may leave its result
-  std::string log_path;              ///< logs/ID.log: the child's output
+  std::string child_result_path;     ///< runs/ID.json.child (a round: rounds/ID.round<k>.json.child): where a child may leave its result
+  std::string log_path;              ///< logs/ID.log (a round: logs/ID.round<k>.log): the child's output
 };
 
 /// Jobs that share one structure (build_groups.hpp), ready to run: one child, one build.

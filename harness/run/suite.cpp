@@ -209,8 +209,23 @@ SuiteConfig load_suite(const std::string& path) {
 
 namespace {
 
-// The top level's settings (repeat, timeout_s, memory_limit_mb, truth, name) into `cfg`.
+// `rounds:`, an integer from 1 to kMaxSuiteRounds; a bad one is named with its line and text.
+int read_rounds(const YAML::Node& node, const std::string& path) {
+  const std::string range = "rounds must be an integer from 1 to " + std::to_string(kMaxSuiteRounds);
+  if (!node.IsScalar()) suite_error(path, node, range + " (times each job is run), not a list or a map");
+  int rounds = 0;
+  try {
+    rounds = node.as<int>();
+  } catch (const YAML::Exception&) {
+    suite_error(path, node, range + " (times each job is run), not '" + node.Scalar() + "'");
+  }
+  if (rounds < 1 || rounds > kMaxSuiteRounds) suite_error(path, node, range + ", not " + node.Scalar());
+  return rounds;
+}
+
+// The top level's settings (repeat, rounds, timeout_s, memory_limit_mb, truth, name) into `cfg`.
 void read_settings(const YAML::Node& root, const std::string& path, SuiteConfig& cfg) {
+  if (root["rounds"]) cfg.rounds = read_rounds(root["rounds"], path);
   try {
     cfg.name = root["name"] ? root["name"].as<std::string>() : fs::path(path).stem().string();
     if (root["repeat"]) cfg.repeat = root["repeat"].as<int>();

@@ -46,10 +46,17 @@ struct JobPlan {
 /// The most query threads a job may ask for (as `bvhbench run --threads`).
 inline constexpr int kMaxJobThreads = 1024;
 
+/// The most rounds a suite may ask for: best of N settles within a handful, and a typo of 300
+/// would run the suite 300 times.
+inline constexpr int kMaxSuiteRounds = 100;
+
 struct SuiteConfig {
   std::string name;
   std::string file;
   int repeat = 5;
+  /// Times every job is run, round-major (suite_runner.hpp): each result is its best round
+  /// (round_merge.hpp). 1: each job once, as a suite always did.
+  int rounds = 1;
   double timeout_s = 600;
   double memory_limit_mb = 16384;
   bool truth = true;  ///< attach the oracle (bvhbench truth) when it can be computed
@@ -70,7 +77,7 @@ std::string format_number(double v);
 
 /// The jobs `jobs` of the suite `cfg` as JSON, without running anything: the suite's settings
 /// and, per job, its id, mesh, query set (how it is made), query type, method (spec, name,
-/// canonical key, every option's value), threads and repetitions. What `bvhbench suite FILE
+/// canonical key, every option's value), threads, repetitions and rounds. What `bvhbench suite FILE
 /// --list --json` prints, and what every tool that needs a suite's jobs reads (suites/README.md).
 nlohmann::json suite_jobs_json(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs);
 

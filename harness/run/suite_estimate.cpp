@@ -330,14 +330,16 @@ double SuiteEstimator::query_seconds(const JobPlan& job, double t, bool* known) 
   return o->query_seconds * (1.0 + std::max(0.0, std::log2(t / o->triangles)) / 4.0);
 }
 
-SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const std::vector<bool>& to_run,
-                                 const std::vector<BuildGroup>& groups, bool shared_builds,
-                                 const std::string& data_dir) const {
+SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs,
+                                 const std::vector<std::vector<bool>>& to_run, const std::vector<BuildGroup>& groups,
+                                 bool shared_builds, const std::string& data_dir) const {
   SuitePrice p;
   p.observations = obs_.size();
   p.rescaled = rescaled_;
+  p.rounds = int(to_run.size());
   p.job_seconds.assign(jobs.size(), 0.0);
   p.build_seconds.assign(jobs.size(), 0.0);
+  p.job_runs.assign(jobs.size(), 0);
   std::map<std::string, double> tris;
   auto triangles = [&](const JobPlan& j) {
     auto it = tris.find(j.mesh.path);
@@ -347,29 +349,46 @@ SuitePrice SuiteEstimator::price(const SuiteConfig& cfg, const std::vector<JobPl
     }
     return std::max(1.0, it->second);
   };
+  std::vector<bool> guessed(jobs.size(), false);
+  for (const std::vector<bool>& round : to_run)
+    price_round(cfg, jobs, round, groups, shared_builds, triangles, p, guessed);
+  std::vector<bool> any_round(jobs.size(), false);  // the query sets and oracles are made once
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    any_round[i] = p.job_runs[i] > 0;
+    p.jobs += any_round[i] ? 1 : 0;
+    p.guessed += guessed[i] ? 1 : 0;
+  }
+  p.data_seconds = data_seconds(cfg, jobs, any_round, data_dir, triangles);
+  return p;
+}
+
+void SuiteEstimator::price_round(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs,
+                                 const std::vector<bool>& to_run, const std::vector<BuildGroup>& groups,
+                                 bool shared_builds, const std::function<double(const JobPlan&)>& triangles,
+                                 SuitePrice& p, std::vector<bool>& guessed) const {
   for (const BuildGroup& g : groups) {
     bool first = true;  // the job that loads the mesh and builds
     for (std::size_t i : g.jobs) {
       if (!to_run[i]) continue;
       const JobPlan& j = jobs[i];
       const double t = triangles(j);
-      ++p.jobs;
+      ++p.runs;
+      ++p.job_runs[i];
       if (!j.method.resolved()) continue;  // recorded at once, never run
       bool build_known = true, query_known = true;
       const bool builds = first || !shared_builds;
       double s = rest_fixed_ + double(cfg.repeat + 2) * double(j.queries.n) * query_seconds(j, t, &query_known);
       if (builds) {
-        p.build_seconds[i] = build_seconds(j, t, &build_known);
-        s += rest_per_triangle_ * t + p.build_seconds[i];
+        const double build = build_seconds(j, t, &build_known);
+        p.build_seconds[i] += build;
+        s += rest_per_triangle_ * t + build;
       }
       p.builds += builds ? 1 : 0;
-      p.guessed += build_known && query_known ? 0 : 1;
-      p.job_seconds[i] = s;
+      guessed[i] = guessed[i] || !(build_known && query_known);
+      p.job_seconds[i] += s;
       first = false;
     }
   }
-  p.data_seconds = data_seconds(cfg, jobs, to_run, data_dir, triangles);
-  return p;
 }
 
 /// The query sets (and oracles) of the jobs to run that the cache does not hold yet.
@@ -401,11 +420,18 @@ double SuitePrice::total() const {
   return s;
 }
 
+double SuitePrice::run_seconds(std::size_t job) const {
+  if (job >= job_seconds.size() || job >= job_runs.size() || job_runs[job] <= 0) return 0.0;
+  return job_seconds[job] / job_runs[job];
+}
+
 std::string SuitePrice::describe() const {
   double jobs_s = 0;
   for (double j : job_seconds) jobs_s += j;
   std::ostringstream o;
-  o << jobs << " job(s) to run, " << builds << " build(s): expected ~" << format_seconds(total()) << " (jobs "
+  o << jobs << " job(s) to run";
+  if (rounds > 1) o << " in " << rounds << " rounds (" << runs << " run(s))";
+  o << ", " << builds << " build(s): expected ~" << format_seconds(total()) << " (jobs "
     << format_seconds(jobs_s) << ", query sets and oracles " << format_seconds(data_seconds) << "; priced from "
     << observations << " result(s) on disk";
   if (rescaled) o << ", " << rescaled << " of them scaled to this machine's speed by the calibration kernel";
@@ -422,11 +448,14 @@ json price_json(const SuitePrice& price, const std::vector<JobPlan>& jobs) {
     listed.push_back({{"id", jobs[i].id},
                       {"triangles", mesh_triangles(jobs[i].mesh.path)},
                       {"seconds", price.job_seconds[i]},
-                      {"build_seconds", price.build_seconds[i]}});
+                      {"build_seconds", price.build_seconds[i]},
+                      {"runs", i < price.job_runs.size() ? price.job_runs[i] : 0}});
   }
   return {{"seconds", price.total()},
           {"data_seconds", price.data_seconds},
           {"jobs", price.jobs},
+          {"rounds", price.rounds},
+          {"runs", price.runs},
           {"builds", price.builds},
           {"observations", price.observations},
           {"priced", listed}};

@@ -14,6 +14,8 @@
 ///    (log T);
 ///  - the rest: a child's start, the calibration and the accuracy (a fixed part) and, once per
 ///    structure, loading the mesh (per triangle): fitted over every observation.
+/// A suite run in rounds (SuiteConfig::rounds) pays all three once per round: each round runs
+/// every job again, on a structure built again.
 /// Each observation's build and queries are first brought to this machine as it is now: scaled
 /// by the calibration kernel (calibration.hpp) timed here against the kernel its result recorded,
 /// so results made on a faster machine, or on this one while it was busy, price what they would
@@ -59,22 +61,29 @@ double mesh_triangles(const std::string& path);
 
 /// The expected time of a suite's jobs.
 struct SuitePrice {
-  std::vector<double> job_seconds;  ///< by job (0 for a job that will not run)
+  std::vector<double> job_seconds;  ///< by job, over its rounds to run (0 for a job that will not run)
   std::vector<double> build_seconds;  ///< by job, the part of job_seconds that builds its structure
+  std::vector<int> job_runs;        ///< by job, the rounds it is priced for (0 for a job that will not run)
   double data_seconds = 0;          ///< query sets and oracles still to make
-  std::size_t jobs = 0;             ///< jobs priced (to run)
-  std::size_t builds = 0;           ///< structures built for them
+  int rounds = 1;                   ///< the suite's rounds
+  std::size_t jobs = 0;             ///< jobs priced (to run in at least one round)
+  std::size_t runs = 0;             ///< job runs priced: each job once per round it has to run
+  std::size_t builds = 0;           ///< structures built for them, over the rounds
   std::size_t observations = 0;     ///< results it learned from
   std::size_t unknown_meshes = 0;   ///< meshes of unknown size (priced as 1 triangle)
   std::size_t guessed = 0;          ///< jobs of a method never observed
   std::size_t rescaled = 0;         ///< results whose speed was scaled to this machine by over 10 %
   double total() const;
-  /// "N job(s), B build(s): expected ~T (jobs .., query sets and oracles ..; from O results)".
+  /// The expected seconds of one run (one round) of job `job`: job_seconds / job_runs.
+  double run_seconds(std::size_t job) const;
+  /// "N job(s) to run[ in R rounds (M run(s))], B build(s): expected ~T (jobs .., query sets and
+  /// oracles ..; from O results)".
   std::string describe() const;
 };
 
 /// `suite --estimate --json`: the total and its parts, and each job to run with its expected
-/// seconds and the build's part of them (where the time of a suite goes, before it runs).
+/// seconds over its rounds, the build's part of them and its runs (where the time of a suite
+/// goes, before it runs).
 nlohmann::json price_json(const SuitePrice& price, const std::vector<JobPlan>& jobs);
 
 class SuiteEstimator {
@@ -87,17 +96,25 @@ class SuiteEstimator {
   /// committed baseline and the report tests' fixture.
   static std::vector<std::string> default_folders(const std::string& out);
 
-  /// Prices `jobs[i]` for each i in `to_run`, built once per group of `groups` (each job alone
-  /// when `shared_builds` is false), with the suite's repeat and truth; the query sets and
-  /// oracles not cached under `data_dir` on top.
-  SuitePrice price(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const std::vector<bool>& to_run,
-                   const std::vector<BuildGroup>& groups, bool shared_builds, const std::string& data_dir) const;
+  /// Prices `jobs[i]` in each round r for which to_run[r][i] (one vector per round of the suite,
+  /// each of jobs.size()), built once per group of `groups` in each round (each job alone when
+  /// `shared_builds` is false), with the suite's repeat and truth; the query sets and oracles not
+  /// cached under `data_dir` on top, once.
+  SuitePrice price(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs,
+                   const std::vector<std::vector<bool>>& to_run, const std::vector<BuildGroup>& groups,
+                   bool shared_builds, const std::string& data_dir) const;
 
   std::size_t observations() const { return obs_.size(); }
 
  private:
   void fit_rest();
   void scale_to_machine(double kernel_seconds_here);
+  /// One round of `to_run` into `p` (job_seconds, build_seconds, job_runs, runs, builds);
+  /// `guessed` marks the jobs priced without an observation of their method.
+  void price_round(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const std::vector<bool>& to_run,
+                   const std::vector<BuildGroup>& groups, bool shared_builds,
+                   const std::function<double(const JobPlan&)>& triangles, SuitePrice& p,
+                   std::vector<bool>& guessed) const;
   double build_seconds(const JobPlan& job, double triangles, bool* known) const;
   double data_seconds(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs, const std::vector<bool>& to_run,
                       const std::string& data_dir, const std::function<double(const JobPlan&)>& triangles) const;

@@ -41,8 +41,9 @@ nlohmann::json method_json(const MethodSpec& m) {
 
 nlohmann::json suite_jobs_json(const SuiteConfig& cfg, const std::vector<JobPlan>& jobs) {
   nlohmann::json out = {{"suite", cfg.name},       {"file", cfg.file},
-                        {"repeat", cfg.repeat},    {"timeout_s", cfg.timeout_s},
-                        {"memory_limit_mb", cfg.memory_limit_mb}, {"truth", cfg.truth}};
+                        {"repeat", cfg.repeat},    {"rounds", cfg.rounds},
+                        {"timeout_s", cfg.timeout_s}, {"memory_limit_mb", cfg.memory_limit_mb},
+                        {"truth", cfg.truth}};
   nlohmann::json list = nlohmann::json::array();
   for (const JobPlan& j : jobs)
     list.push_back({{"id", j.id},
@@ -51,7 +52,8 @@ nlohmann::json suite_jobs_json(const SuiteConfig& cfg, const std::vector<JobPlan
                     {"query", to_string(j.query)},
                     {"method", method_json(j.method)},
                     {"threads", j.threads},
-                    {"repeat", cfg.repeat}});
+                    {"repeat", cfg.repeat},
+                    {"rounds", cfg.rounds}});
   out["jobs"] = list;
   return out;
 }

@@ -18,7 +18,7 @@ struct LevelInfo {
 
 const std::vector<LevelInfo>& levels() {
   static const std::vector<LevelInfo> all = {
-      {SuiteLevel::top, "the suite's top level", {"name", "repeat", "timeout_s", "memory_limit_mb", "truth", "matrices"}},
+      {SuiteLevel::top, "the suite's top level", {"name", "repeat", "rounds", "timeout_s", "memory_limit_mb", "truth", "matrices"}},
       {SuiteLevel::matrix, "a matrix", {"meshes", "queries", "query", "methods", "threads"}},
       {SuiteLevel::mesh, "a mesh ({path:, name:})", {"path", "name"}},
       {SuiteLevel::query_set, "a query set ({kind:, n:, seed:, params:})", {"kind", "n", "seed", "params"}},

@@ -16,7 +16,7 @@ namespace bvhbench {
 /// The maps of a suite file whose keys are fixed. A query kind's and a method's `params:` are
 /// checked against their own declarations (query_set.hpp, the method's ParamSpecs).
 enum class SuiteLevel {
-  top,          ///< name, repeat, timeout_s, memory_limit_mb, truth, matrices
+  top,          ///< name, repeat, rounds, timeout_s, memory_limit_mb, truth, matrices
   matrix,       ///< meshes, queries, query, methods, threads
   mesh,         ///< {path:, name:}
   query_set,    ///< {kind:, n:, seed:, params:}

@@ -73,11 +73,13 @@ def test_a_method_option_beside_name_and_a_key_of_another_level(bvhbench, tmp_pa
             "did you mean `params: {coherent: ...}`?", "(line 4)")
     refused(suite(bvhbench, tmp_path, "matrices:\n" + GOOD_MATRIX + "    repeat: 3\n"),
             "unknown key 'repeat' in a matrix", "'repeat' belongs in the suite's top level", "(line 6)")
+    refused(suite(bvhbench, tmp_path, "matrices:\n" + GOOD_MATRIX + "    rounds: 2\n"),
+            "unknown key 'rounds' in a matrix", "'rounds' belongs in the suite's top level", "(line 6)")
     refused(suite(bvhbench, tmp_path, "matrices:\n  - meshes: [{path: m.ply, nmae: m}]\n"
                   "    queries: [random]\n    methods: [brute_force]\n"), "did you mean 'name'?", "(line 2)")
     # A key nothing is close to: the known keys, no guess.
     p = suite(bvhbench, tmp_path, "colour: blue\nmatrices:\n" + GOOD_MATRIX)
-    refused(p, "unknown key 'colour' in the suite's top level", "(known: name, repeat, timeout_s")
+    refused(p, "unknown key 'colour' in the suite's top level", "(known: name, repeat, rounds, timeout_s")
     assert "did you mean" not in p.stderr
     # Keys starting with '_' stay a place for YAML anchors.
     assert suite(bvhbench, tmp_path, "_anchor: &a [m.ply]\nmatrices:\n" + GOOD_MATRIX).returncode == 0

@@ -29,8 +29,10 @@ SuiteConfig suite_on(TmpDir& d, const std::string& mesh, long n) {
   return load_suite(d.file(mesh + ".yml"));
 }
 
+/// Every job of `cfg` in each of its rounds.
 SuitePrice price_of(const SuiteEstimator& e, const SuiteConfig& cfg, bool shared, const std::string& data) {
-  return e.price(cfg, cfg.jobs, std::vector<bool>(cfg.jobs.size(), true), group_by_structure(cfg.jobs), shared, data);
+  const std::vector<std::vector<bool>> every_round(std::size_t(cfg.rounds), std::vector<bool>(cfg.jobs.size(), true));
+  return e.price(cfg, cfg.jobs, every_round, group_by_structure(cfg.jobs), shared, data);
 }
 
 /// A finished ebp_octree job on `triangles` triangles: 1 s of build, 1e5 queries/s, beside a
@@ -101,6 +103,37 @@ TEST(SuiteEstimate, AStructureSharedByItsJobsIsBuiltOnce) {
   EXPECT_EQ(alone.builds, 4u);
   // Three builds of 1 s (and three mesh loads) fewer.
   EXPECT_GT(alone.total() - shared.total(), 3.0);
+}
+
+// Each round runs every job again on a structure built again; the query sets are made once.
+TEST(SuiteEstimate, EachRoundIsPricedAgainButTheDataOnce) {
+  TmpDir d;
+  write_ply_header(d.file("big.ply"), 5000000);
+  write_observation(d.file("seen/runs"), 5000000);
+  const SuiteEstimator e({d.file("seen")});
+  SuiteConfig cfg = suite_on(d, "big", 1000);
+  const SuitePrice once = price_of(e, cfg, true, d.file("data"));
+  cfg.rounds = 3;
+  const SuitePrice thrice = price_of(e, cfg, true, d.file("data"));
+  EXPECT_EQ(thrice.jobs, once.jobs);
+  EXPECT_EQ(thrice.runs, 3 * once.runs);
+  EXPECT_EQ(thrice.builds, 3 * once.builds);
+  EXPECT_GT(thrice.data_seconds, 0.0);
+  EXPECT_DOUBLE_EQ(thrice.data_seconds, once.data_seconds);
+  EXPECT_NEAR(thrice.total() - thrice.data_seconds, 3 * (once.total() - once.data_seconds), 1e-9 * once.total());
+  for (std::size_t i = 0; i < cfg.jobs.size(); ++i) {
+    EXPECT_EQ(thrice.job_runs[i], 3);
+    EXPECT_NEAR(thrice.run_seconds(i), once.run_seconds(i), 1e-12);
+  }
+  EXPECT_NE(thrice.describe().find("4 job(s) to run in 3 rounds (12 run(s)), 3 build(s)"), std::string::npos)
+      << thrice.describe();
+  EXPECT_EQ(once.describe().find("round"), std::string::npos) << once.describe();
+  // --resume after round 1: the rounds left alone are priced.
+  std::vector<std::vector<bool>> left(3, std::vector<bool>(cfg.jobs.size(), true));
+  left[0].assign(cfg.jobs.size(), false);
+  const SuitePrice two_left = e.price(cfg, cfg.jobs, left, group_by_structure(cfg.jobs), true, d.file("data"));
+  EXPECT_EQ(two_left.runs, 2 * once.runs);
+  EXPECT_NEAR(two_left.total() - two_left.data_seconds, 2 * (once.total() - once.data_seconds), 1e-9 * once.total());
 }
 
 TEST(SuiteEstimate, AResultMadeOnASlowerMachineIsScaledByTheCalibrationKernel) {

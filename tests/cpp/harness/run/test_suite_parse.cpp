@@ -127,3 +127,28 @@ TEST(SuiteParse, MethodsAllIsEveryMethodWithItsOwnSweep) {
                      "except: names no method: 'no_such'");
   expect_input_error([] { parse_suite(suite("[{all: true, only: [x]}]"), "s.yml"); }, "s.yml", "unknown key 'only'");
 }
+
+// `rounds:` (suites/README.md, "Rounds"): times every job runs, 1 by default; a bad value is
+// refused with the file, its line and the value given.
+TEST(SuiteParse, RoundsIsACountFromOneWithItsLineAndValueWhenBad) {
+  EXPECT_EQ(parse_suite(suite("[brute_force]"), "s.yml").rounds, 1);
+  EXPECT_EQ(parse_suite(suite("[brute_force]", "[inside]", "rounds: 3\n"), "s.yml").rounds, 3);
+  EXPECT_EQ(parse_suite(suite("[brute_force]", "[inside]", "rounds: 100\n"), "s.yml").rounds, 100);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"0", "rounds must be an integer from 1 to 100, not 0 (line 2)"},
+      {"-2", "rounds must be an integer from 1 to 100, not -2 (line 2)"},
+      {"101", "rounds must be an integer from 1 to 100, not 101 (line 2)"},
+      {"x", "not 'x' (line 2)"},
+      {"2.5", "not '2.5' (line 2)"},
+      {"true", "not 'true' (line 2)"},
+      {"[2]", "not a list or a map (line 2)"},
+      {"{n: 2}", "not a list or a map (line 2)"}};
+  for (const auto& [value, message] : bad) {  // on line 2, after the name
+    SCOPED_TRACE(value);
+    expect_input_error([&] { parse_suite("name: s\nrounds: " + value + "\n" + suite("[brute_force]"), "dir/s.yml"); },
+                       "dir/s.yml", message);
+  }
+  // A misspelt key is caught by the grammar like any other.
+  expect_input_error([] { parse_suite("round: 2\n" + suite("[brute_force]"), "s.yml"); }, "s.yml",
+                     "did you mean 'rounds'?");
+}
