@@ -173,6 +173,13 @@ std::uint64_t column_box_pass_baseline(const float* const lo[3], const float* co
   return within;
 }
 
+void closest_points_baseline(const Vec3d& p, const LeafTri* const t[4], unsigned m, Vec3d q[4], double d2[4]) {
+  for (unsigned i = 0; i < m; ++i) {
+    q[i] = bvhbench::closest_point_on_triangle(p, to_d(t[i]->a), to_d(t[i]->b), to_d(t[i]->c));
+    d2[i] = squared_norm(q[i] - p);
+  }
+}
+
 void box_distances_baseline(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2) {
   for (std::uint32_t j = 0; j < n; ++j) d2[j] = box_d2(boxes[j], p);
 }
@@ -383,6 +390,106 @@ EBP_AVX2 std::uint64_t column_box_pass_avx2(const float* const lo[3], const floa
   return n >= 64 ? within : within & ((std::uint64_t(1) << n) - 1);
 }
 
+/// Lane-wise dot product in dot()'s order: (x0 y0 + x1 y1) + x2 y2.
+EBP_AVX2 inline __m256d dot_pd(const __m256d x[3], const __m256d y[3]) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x[0], y[0]), _mm256_mul_pd(x[1], y[1])), _mm256_mul_pd(x[2], y[2]));
+}
+
+// Ordered comparisons (false on NaN, as in C++) and their conjunction, lane-wise.
+EBP_AVX2 inline __m256d le(__m256d x, __m256d y) { return _mm256_cmp_pd(x, y, _CMP_LE_OQ); }
+EBP_AVX2 inline __m256d ge(__m256d x, __m256d y) { return _mm256_cmp_pd(x, y, _CMP_GE_OQ); }
+EBP_AVX2 inline __m256d gt(__m256d x, __m256d y) { return _mm256_cmp_pd(x, y, _CMP_GT_OQ); }
+EBP_AVX2 inline __m256d all(__m256d x, __m256d y) { return _mm256_and_pd(x, y); }
+
+/// A vertex (3 floats at byte offset Off) of 4 records as 3 columns of doubles (exact): a row of 4
+/// floats from each record (inside it: the static_assert above), a 4x4 transpose, widened.
+template <std::size_t Off>
+EBP_AVX2 inline void vertex_columns(const LeafTri* const r[4], __m256d out[3]) {
+  auto row = [&](int i) { return _mm_loadu_ps(reinterpret_cast<const float*>(reinterpret_cast<const char*>(r[i]) + Off)); };
+  __m128 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3);
+  _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // x, y, z of the four (r3: the next field, unused)
+  out[0] = _mm256_cvtps_pd(r0);
+  out[1] = _mm256_cvtps_pd(r1);
+  out[2] = _mm256_cvtps_pd(r2);
+}
+
+/// Lanes where mask is set take `a`, the others keep `b`.
+EBP_AVX2 inline void select3(__m256d mask, const __m256d a[3], __m256d b[3]) {
+  for (int k = 0; k < 3; ++k) b[k] = _mm256_blendv_pd(b[k], a[k], mask);
+}
+
+EBP_AVX2 void closest_points_avx2(const Vec3d& p, const LeafTri* const t[4], unsigned m, Vec3d q[4], double d2[4]) {
+  // The 4 records' vertices as columns of doubles; missing lanes repeat the first triangle.
+  const LeafTri* r[4];
+  for (unsigned i = 0; i < 4; ++i) r[i] = t[i < m ? i : 0];
+  __m256d A[3], B[3], C[3];
+  vertex_columns<offsetof(LeafTri, a)>(r, A);
+  vertex_columns<offsetof(LeafTri, b)>(r, B);
+  vertex_columns<offsetof(LeafTri, c)>(r, C);
+  const __m256d P[3] = {_mm256_set1_pd(p.x), _mm256_set1_pd(p.y), _mm256_set1_pd(p.z)};
+  __m256d ab[3], ac[3], ap[3], bp[3], cp[3], cb[3];
+  for (int k = 0; k < 3; ++k) {
+    ab[k] = _mm256_sub_pd(B[k], A[k]);
+    ac[k] = _mm256_sub_pd(C[k], A[k]);
+    ap[k] = _mm256_sub_pd(P[k], A[k]);
+    bp[k] = _mm256_sub_pd(P[k], B[k]);
+    cp[k] = _mm256_sub_pd(P[k], C[k]);
+    cb[k] = _mm256_sub_pd(C[k], B[k]);
+  }
+  // closest_point_on_triangle's values, then its cases as masks (ordered comparisons: false on NaN, as in C++)
+  const __m256d d1 = dot_pd(ab, ap), d2_ = dot_pd(ac, ap), d3 = dot_pd(ab, bp), d4 = dot_pd(ac, bp);
+  const __m256d d5 = dot_pd(ab, cp), d6 = dot_pd(ac, cp);
+  const __m256d vc = _mm256_sub_pd(_mm256_mul_pd(d1, d4), _mm256_mul_pd(d3, d2_));
+  const __m256d vb = _mm256_sub_pd(_mm256_mul_pd(d5, d2_), _mm256_mul_pd(d1, d6));
+  const __m256d va = _mm256_sub_pd(_mm256_mul_pd(d3, d6), _mm256_mul_pd(d5, d4));
+  const __m256d Z = _mm256_setzero_pd();
+  const __m256d d13 = _mm256_sub_pd(d1, d3), d26 = _mm256_sub_pd(d2_, d6);
+  const __m256d d43 = _mm256_sub_pd(d4, d3), d56 = _mm256_sub_pd(d5, d6), d4356 = _mm256_add_pd(d43, d56);
+  const __m256d in_a = all(le(d1, Z), le(d2_, Z));
+  const __m256d in_b = all(ge(d3, Z), le(d4, d3));
+  const __m256d in_ab = all(all(le(vc, Z), ge(d1, Z)), all(le(d3, Z), gt(d13, Z)));
+  const __m256d in_c = all(ge(d6, Z), le(d5, d6));
+  const __m256d in_ca = all(all(le(vb, Z), ge(d2_, Z)), all(le(d6, Z), gt(d26, Z)));
+  const __m256d in_bc = all(all(le(va, Z), ge(d43, Z)), all(ge(d56, Z), gt(d4356, Z)));
+  const __m256d denom = _mm256_add_pd(_mm256_add_pd(va, vb), vc);
+  // the face, then each earlier case over it, last the first: the scalar's order of tests
+  const __m256d v = _mm256_div_pd(vb, denom), w = _mm256_div_pd(vc, denom);
+  const __m256d s_ab = _mm256_div_pd(d1, d13), s_ca = _mm256_div_pd(d2_, d26), s_bc = _mm256_div_pd(d43, d4356);
+  __m256d Q[3], X[3];
+  for (int k = 0; k < 3; ++k) Q[k] = _mm256_add_pd(_mm256_add_pd(A[k], _mm256_mul_pd(ab[k], v)), _mm256_mul_pd(ac[k], w));
+  for (int k = 0; k < 3; ++k) X[k] = _mm256_add_pd(B[k], _mm256_mul_pd(cb[k], s_bc));
+  select3(in_bc, X, Q);
+  for (int k = 0; k < 3; ++k) X[k] = _mm256_add_pd(A[k], _mm256_mul_pd(ac[k], s_ca));
+  select3(in_ca, X, Q);
+  select3(in_c, C, Q);
+  for (int k = 0; k < 3; ++k) X[k] = _mm256_add_pd(A[k], _mm256_mul_pd(ab[k], s_ab));
+  select3(in_ab, X, Q);
+  select3(in_b, B, Q);
+  select3(in_a, A, Q);
+  __m256d E[3];
+  for (int k = 0; k < 3; ++k) E[k] = _mm256_sub_pd(Q[k], P[k]);
+  const __m256d D2 = dot_pd(E, E);
+  alignas(32) double qx[4], qy[4], qz[4], dd[4];
+  _mm256_store_pd(qx, Q[0]);
+  _mm256_store_pd(qy, Q[1]);
+  _mm256_store_pd(qz, Q[2]);
+  _mm256_store_pd(dd, D2);
+  // a zero-area triangle past every case (denom not > 0): the scalar's fall-back over its edges
+  const __m256d any_case = _mm256_or_pd(_mm256_or_pd(_mm256_or_pd(in_a, in_b), _mm256_or_pd(in_ab, in_c)),
+                                        _mm256_or_pd(in_ca, in_bc));
+  const unsigned fallback =
+      unsigned(_mm256_movemask_pd(_mm256_andnot_pd(any_case, _mm256_cmp_pd(denom, Z, _CMP_NGT_UQ))));
+  for (unsigned i = 0; i < m; ++i) {
+    if (fallback >> i & 1u) {
+      q[i] = bvhbench::closest_point_on_triangle(p, to_d(r[i]->a), to_d(r[i]->b), to_d(r[i]->c));
+      d2[i] = squared_norm(q[i] - p);
+    } else {
+      q[i] = Vec3d(qx[i], qy[i], qz[i]);
+      d2[i] = dd[i];
+    }
+  }
+}
+
 EBP_AVX2 inline __m256d abs_pd(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
 
 EBP_AVX2 unsigned block_pass_avx2(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
@@ -477,11 +584,13 @@ LeafKernelTable make(LeafKernels k) {
 #if defined(EBP_X86)
   if (k == LeafKernels::avx2 && cpu_has_avx2())
     return {plane_pass_avx2,    box_pass_avx2,      block_pass_avx2,        box_distances_avx2,
-            edge_signs_avx2,    distance_pass_avx2, column_box_pass_avx2, LeafKernels::avx2};
+            edge_signs_avx2,    distance_pass_avx2, column_box_pass_avx2,   closest_points_avx2,
+            LeafKernels::avx2};
 #endif
   (void)k;
   return {plane_pass_baseline, box_pass_baseline,      block_pass_baseline,        box_distances_baseline,
-          edge_signs_baseline, distance_pass_baseline, column_box_pass_baseline, LeafKernels::baseline};
+          edge_signs_baseline, distance_pass_baseline, column_box_pass_baseline, closest_points_baseline,
+          LeafKernels::baseline};
 }
 
 LeafKernelTable& current() {

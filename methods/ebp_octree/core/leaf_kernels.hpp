@@ -116,6 +116,12 @@ struct LeafKernelTable {
   /// with g2[j] <= box_lim. A near set's members, before its served search (near_set.hpp).
   std::uint64_t (*column_box_pass)(const float* const lo[3], const float* const hi[3], std::uint32_t n,
                                    const float q_lo[3], const float q_hi[3], float box_lim, float* g2);
+  /// The exact closest points of p on the triangles t[0, m), 1 <= m <= 4 (their float vertices
+  /// taken exactly as doubles): q[i] = closest_point_on_triangle(p, a, b, c) and d2[i] =
+  /// squared_norm(q[i] - p), bit for bit (the same double operations lane by lane, the same
+  /// order of the cases; a zero-area triangle that reaches the scalar's fall-back gets it). The
+  /// near start's exact tests, four at a time.
+  void (*closest_points)(const Vec3d& p, const LeafTri* const t[4], unsigned m, Vec3d q[4], double d2[4]);
   LeafKernels kind;
 };
 

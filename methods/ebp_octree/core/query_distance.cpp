@@ -177,15 +177,38 @@ class Query::DistanceSearch {
     const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
     point_bounds();
     float g2[kNearMax];
+    // The survivors' exact tests four at a time (closest_points), in member order, each batch
+    // taking the members still within the limit of the best the batches before it left.
+    const LeafKernelTable& K = leaf_kernel_table();
+    const LeafTri* batch[4];
+    unsigned member[4], m = 0;
+    auto test_batch = [&] {
+      if (m == 1) {  // one: the scalar test is cheaper than a batch
+        scan_node = ns.node[member[0]];
+        evaluate(*batch[0], ns.k[member[0]], ns.leaf[member[0]]);
+        m = 0;
+        return;
+      }
+      Vec3d q[4];
+      double d2[4];
+      K.closest_points(p, batch, m, q, d2);
+      for (unsigned i = 0; i < m; ++i) {
+        scan_node = ns.node[member[i]];
+        offer(*batch[i], ns.k[member[i]], ns.leaf[member[i]], q[i], d2[i]);
+      }
+      m = 0;
+    };
     for (std::uint64_t bits = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2); bits;
          bits &= bits - 1) {
       const unsigned j = unsigned(__builtin_ctzll(bits));
       if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
       const LeafTri& t = tris[ns.k[j]];
       if (t.tri() == seed) continue;
-      scan_node = ns.node[j];
-      evaluate(t, ns.k[j], ns.leaf[j]);
+      batch[m] = &t;
+      member[m++] = j;
+      if (m == 4) test_batch();
     }
+    if (m > 0) test_batch();
     ++counters.near_served;
     counters.near_tested += ns.n;
     return true;
@@ -243,9 +266,13 @@ class Query::DistanceSearch {
   /// or the renewal's collector. The key (a load from an array over all triangles, out of core)
   /// is read only when it can decide.
   void evaluate(const LeafTri& t, std::uint32_t k, std::uint32_t leaf) {
-    ++counters.triangles_tested;
     const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
-    const double d2 = squared_norm(q - p);
+    offer(t, k, leaf, q, squared_norm(q - p));
+  }
+
+  /// evaluate's work after the exact closest point q of LeafTri k (its squared distance d2).
+  void offer(const LeafTri& t, std::uint32_t k, std::uint32_t leaf, const Vec3d& q, double d2) {
+    ++counters.triangles_tested;
     if (B.collect) {  // a certificate's renewal: the collector keeps it and sets the prune radius
       const std::uint64_t key = key_of ? key_of[t.tri()] : t.tri();
       B.best = B.collect->offer(d2, q, key, t, TriangleSite{B.collect_page, k, leaf, scan_node});

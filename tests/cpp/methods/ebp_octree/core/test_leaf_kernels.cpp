@@ -450,6 +450,86 @@ TEST(EbpLeafKernels, ColumnBoxPassGivesTheSpelledOutBits) {
   if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
 }
 
+// The near start's exact tests, four at a time: every kernel gives closest_point_on_triangle's
+// point and squared distance bit for bit, in every one of its cases (vertices, edges, the face),
+// on the meshes' triangles, slivers and collapsed triangles, for points near and on them, for any
+// batch size and position in the batch; a point with no value gives none.
+TEST(EbpLeafKernels, ClosestPointsGiveTheScalarBits) {
+  KernelsGuard g;
+  std::vector<LeafKernels> kinds{LeafKernels::baseline};
+  if (cpu_has_avx2()) kinds.push_back(LeafKernels::avx2);
+  std::vector<LeafTri> tris;
+  for (const char* name : {"cow.obj", "fandisk.obj"}) {
+    const Octree t = build(bvhbench::load_mesh(shared_mesh(name)));
+    for (std::size_t k = 0; k < t.tris.size(); k += 7) tris.push_back(t.tris[k]);
+  }
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<float> U(-1, 1);
+  auto with_vertices = [](LeafTri t, const float a[3], const float b[3], const float c[3]) {
+    std::copy(a, a + 3, t.a);
+    std::copy(b, b + 3, t.b);
+    std::copy(c, c + 3, t.c);
+    return t;
+  };
+  for (int i = 0; i < 2000; ++i) {  // slivers, collinear and collapsed triangles
+    const float a[3] = {U(rng), U(rng), U(rng)}, b[3] = {U(rng), U(rng), U(rng)};
+    float mid[3], near_mid[3];
+    for (int k = 0; k < 3; ++k) {
+      mid[k] = 0.5f * (a[k] + b[k]);
+      near_mid[k] = mid[k] + (k == 0 ? 1e-6f : 0.0f);
+    }
+    const LeafTri& base = tris[rng() % tris.size()];
+    tris.push_back(with_vertices(base, a, b, i % 3 == 0 ? a : i % 3 == 1 ? mid : near_mid));
+    tris.push_back(with_vertices(base, a, a, a));
+  }
+  std::size_t features[7] = {}, zero_area = 0;
+  for (std::size_t n = 0; n < 60000; ++n) {
+    const unsigned m = 1 + unsigned(rng() % 4);
+    const LeafTri* batch[4];
+    for (unsigned i = 0; i < m; ++i) batch[i] = &tris[rng() % tris.size()];
+    // p: near the first triangle (a random offset from a point of it, on a vertex, on an edge's
+    // midpoint, or on its plane), or anywhere
+    const LeafTri& t0 = *batch[0];
+    const Vec3d a = to_d(t0.a), b = to_d(t0.b), c = to_d(t0.c);
+    const double scale = std::sqrt(squared_norm(b - a)) + 1e-3;
+    const int kind = int(n % 6);
+    Vec3d p = kind == 0 ? a : kind == 1 ? (a + b) * 0.5 : kind == 2 ? (a + b + c) / 3.0 : Vec3d(U(rng), U(rng), U(rng));
+    if (kind == 2 || kind == 3) p = p + Vec3d(U(rng), U(rng), U(rng)) * scale;
+    // a point with no value, which passes no case of the scalar's (every comparison is false) and
+    // takes its fall-back: the kernels must give no value either (only values beyond the doubles
+    // reach the fall-back; zero-area triangles with finite points all meet an earlier case)
+    if (kind == 5) p = Vec3d(std::numeric_limits<double>::quiet_NaN(), U(rng), U(rng));
+    Vec3d want_q[4];
+    double want_d2[4];
+    for (unsigned i = 0; i < m; ++i) {
+      bvhbench::TriangleFeature f;
+      want_q[i] = bvhbench::closest_point_on_triangle(p, to_d(batch[i]->a), to_d(batch[i]->b), to_d(batch[i]->c), &f);
+      want_d2[i] = squared_norm(want_q[i] - p);
+      ++features[int(f)];
+      const Vec3d ab = to_d(batch[i]->b) - to_d(batch[i]->a), ac = to_d(batch[i]->c) - to_d(batch[i]->a);
+      zero_area += squared_norm(bvhbench::cross(ab, ac)) == 0;
+    }
+    for (LeafKernels kind_used : kinds) {
+      set_leaf_kernels(kind_used);
+      Vec3d q[4];
+      double d2[4];
+      leaf_kernel_table().closest_points(p, batch, m, q, d2);
+      for (unsigned i = 0; i < m; ++i) {
+        if (kind == 5) {
+          ASSERT_TRUE(std::isnan(want_d2[i]));
+          ASSERT_TRUE(std::isnan(d2[i])) << "kernel " << int(kind_used) << " lane " << i;
+          continue;
+        }
+        ASSERT_EQ(0, std::memcmp(&q[i], &want_q[i], sizeof(Vec3d))) << "kernel " << int(kind_used) << " lane " << i;
+        ASSERT_EQ(0, std::memcmp(&d2[i], &want_d2[i], sizeof(double))) << "kernel " << int(kind_used) << " lane " << i;
+      }
+    }
+  }
+  for (int f = 0; f < 7; ++f) EXPECT_GT(features[f], 100u) << "feature " << f << " not exercised";
+  EXPECT_GT(zero_area, 1000u);
+  if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
+}
+
 // Inside answers and every counter are the same with either kernel, coherent or not, on closed
 // meshes, an open one, and stress-style meshes (duplicated faces, zero-area faces, nested shells
 // of both orientations); off the surface the answers are the oracle's on the closed ones.
