@@ -177,38 +177,18 @@ class Query::DistanceSearch {
     const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
     point_bounds();
     float g2[kNearMax];
-    // The survivors' exact tests four at a time (closest_points), in member order, each batch
-    // taking the members still within the limit of the best the batches before it left.
-    const LeafKernelTable& K = leaf_kernel_table();
-    const LeafTri* batch[4];
-    unsigned member[4], m = 0;
-    auto test_batch = [&] {
-      if (m == 1) {  // one: the scalar test is cheaper than a batch
-        scan_node = ns.node[member[0]];
-        evaluate(*batch[0], ns.k[member[0]], ns.leaf[member[0]]);
-        m = 0;
-        return;
-      }
-      Vec3d q[4];
-      double d2[4];
-      K.closest_points(p, batch, m, q, d2);
-      for (unsigned i = 0; i < m; ++i) {
-        scan_node = ns.node[member[i]];
-        offer(*batch[i], ns.k[member[i]], ns.leaf[member[i]], q[i], d2[i]);
-      }
-      m = 0;
-    };
+    // The survivors' exact tests four at a time (ExactTests), in member order, each batch taking
+    // the members still within the limit of the best the batches before it left.
+    ExactTests exact;
     for (std::uint64_t bits = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2); bits;
          bits &= bits - 1) {
       const unsigned j = unsigned(__builtin_ctzll(bits));
       if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
       const LeafTri& t = tris[ns.k[j]];
       if (t.tri() == seed) continue;
-      batch[m] = &t;
-      member[m++] = j;
-      if (m == 4) test_batch();
+      add_exact(exact, t, ns.k[j], ns.leaf[j], ns.node[j]);
     }
-    if (m > 0) test_batch();
+    finish_exact(exact);
     ++counters.near_served;
     counters.near_tested += ns.n;
     return true;
@@ -260,6 +240,42 @@ class Query::DistanceSearch {
     if (stamp_[t.tri()] == qid) return;
     stamp_[t.tri()] = qid;
     evaluate(t, k, leaf);
+  }
+
+  /// Exact tests waiting to run as one batch of the closest_points kernel: its four-lane double
+  /// code has none of the scalar test's data-dependent branches, whose mispredictions cost more
+  /// than the instructions (4M bunny contact: 2.5 % fewer instructions, 13 % less time).
+  struct ExactTests {
+    const LeafTri* t[4];
+    std::uint32_t k[4], leaf[4], node[4];
+    unsigned m = 0;
+  };
+
+  /// Queues the exact test of LeafTri t = tris[k] (of `leaf`, under `node`); a full batch runs.
+  void add_exact(ExactTests& e, const LeafTri& t, std::uint32_t k, std::uint32_t leaf, std::uint32_t node) {
+    e.t[e.m] = &t;
+    e.k[e.m] = k;
+    e.leaf[e.m] = leaf;
+    e.node[e.m] = node;
+    if (++e.m == 4) finish_exact(e);
+  }
+
+  /// Runs the queued tests and offers their closest points in the order they were queued (a lone
+  /// one by the scalar test, cheaper than a batch).
+  void finish_exact(ExactTests& e) {
+    if (e.m == 1) {
+      scan_node = e.node[0];
+      evaluate(*e.t[0], e.k[0], e.leaf[0]);
+    } else if (e.m > 1) {
+      Vec3d q[4];
+      double d2[4];
+      leaf_kernel_table().closest_points(p, e.t, e.m, q, d2);
+      for (unsigned i = 0; i < e.m; ++i) {
+        scan_node = e.node[i];
+        offer(*e.t[i], e.k[i], e.leaf[i], q[i], d2[i]);
+      }
+    }
+    e.m = 0;
   }
 
   /// test_triangle's work after the once-per-query check: the exact closest point, and the best
@@ -377,12 +393,18 @@ class Query::DistanceSearch {
       test_triangle(k0 + i0, lp.li);
       bits &= ~(1u << i0);
     }
+    // the survivors' exact tests in batches (ExactTests), once per input triangle and query
+    ExactTests exact;
     for (; bits; bits &= bits - 1) {
       const unsigned i = unsigned(__builtin_ctz(bits));
       update_limits(lp.eps_p);
       if (plane_abs[i] > plane_lim_ || box_d2[i] > box_lim_) continue;
-      test_triangle(k0 + i, lp.li);
+      const LeafTri& t = tris[k0 + i];
+      if (stamp_[t.tri()] == qid) continue;
+      stamp_[t.tri()] = qid;
+      add_exact(exact, t, k0 + i, lp.li, scan_node);
     }
+    finish_exact(exact);
   }
 
   /// q_lo, q_hi: once per search, and only for a search that tests boxes by them (a page's
