@@ -767,7 +767,9 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // 1,059 / 1,048 / 1,261, and at 0.3 m/s 0 / 3 / 4: 2,249 / 2,121 / 2,430). A box that meets
 // too many triangles or leaf cells gets a second attempt at a quarter of the growth and offset
 // at once; the scale is the path's: halved when a box meets too many triangles (small
-// triangles), doubled back (up to 1) when a set is less than a quarter full. A set gathered
+// triangles), doubled back (up to 1) when a set is less than an eighth full (a quarter, before:
+// the scale went up and down, every other box overflowing; 4M bunny contact 0.2 mm, 3,407 ->
+// 3,117 instructions a search, 0.05 mm -6 %, 0.5 mm +4 %, 0.3 m/s within 1 %). A set gathered
 // first (distance_bound) is kept around the ball (p, r), which it then serves; a set that served
 // no search besides that one before the next gathering was a loss: after kNearLosses in a row
 // the path gathers no set for 8 searches, doubling while the losses go on (up to 256) — a path
@@ -807,7 +809,7 @@ bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
     for (int a = 0; a < 3; ++a) c[a] += std::clamp(dmove_[a] * (part * kNearAhead), r - h, h - r);
     ++counters.near_gathered;
     if (ns.gather(t_, c - Vec3d(h, h, h), c + Vec3d(h, h, h), UINT32_MAX, true)) {
-      if (ns.n < kNearMax / 4) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
+      if (ns.n < kNearMax / 8) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
       return true;
     }
     if (ns.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
