@@ -101,10 +101,14 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   return true;
 }
 
-std::uint64_t NearSet::within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax]) const {
-  const float* const lo[3] = {blo[0], blo[1], blo[2]};
-  const float* const hi[3] = {bhi[0], bhi[1], bhi[2]};
-  return leaf_kernel_table().column_box_pass(lo, hi, n, q_lo, q_hi, box_lim, g2);
+void NearSet::within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax],
+                     std::uint64_t mask[kNearMaskWords]) const {
+  for (std::uint32_t w = 0; w < kNearMaskWords; ++w) {
+    const std::uint32_t first = 64 * w, count = n > first ? std::min<std::uint32_t>(64, n - first) : 0;
+    const float* const lo[3] = {blo[0] + first, blo[1] + first, blo[2] + first};
+    const float* const hi[3] = {bhi[0] + first, bhi[1] + first, bhi[2] + first};
+    mask[w] = count > 0 ? leaf_kernel_table().column_box_pass(lo, hi, count, q_lo, q_hi, box_lim, g2 + first) : 0;
+  }
 }
 
 }  // namespace ebp

@@ -180,14 +180,16 @@ class Query::DistanceSearch {
     // The survivors' exact tests four at a time (ExactTests), in member order, each batch taking
     // the members still within the limit of the best the batches before it left.
     ExactTests exact;
-    for (std::uint64_t bits = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2); bits;
-         bits &= bits - 1) {
-      const unsigned j = unsigned(__builtin_ctzll(bits));
-      if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
-      const LeafTri& t = tris[ns.k[j]];
-      if (t.tri() == seed) continue;
-      add_exact(exact, t, ns.k[j], ns.leaf[j], ns.node[j]);
-    }
+    std::uint64_t mask[kNearMaskWords];
+    ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2, mask);
+    for (std::uint32_t w = 0; w < kNearMaskWords; ++w)
+      for (std::uint64_t bits = mask[w]; bits; bits &= bits - 1) {
+        const unsigned j = 64 * w + unsigned(__builtin_ctzll(bits));
+        if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
+        const LeafTri& t = tris[ns.k[j]];
+        if (t.tri() == seed) continue;
+        add_exact(exact, t, ns.k[j], ns.leaf[j], ns.node[j]);
+      }
     finish_exact(exact);
     ++counters.near_served;
     counters.near_tested += ns.n;
@@ -767,9 +769,9 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // 1,059 / 1,048 / 1,261, and at 0.3 m/s 0 / 3 / 4: 2,249 / 2,121 / 2,430). A box that meets
 // too many triangles or leaf cells gets a second attempt at a quarter of the growth and offset
 // at once; the scale is the path's: halved when a box meets too many triangles (small
-// triangles), doubled back (up to 1) when a set is less than an eighth full (a quarter, before:
-// the scale went up and down, every other box overflowing; 4M bunny contact 0.2 mm, 3,407 ->
-// 3,117 instructions a search, 0.05 mm -6 %, 0.5 mm +4 %, 0.3 m/s within 1 %). A set gathered
+// triangles), doubled back (up to 1) when a set has fewer than 8 members (16 of 64, before: the
+// scale went up and down, every other box overflowing; 4M bunny contact 0.2 mm, 3,407 -> 3,117
+// instructions a search, 0.05 mm -6 %, 0.5 mm +4 %, 0.3 m/s within 1 %). A set gathered
 // first (distance_bound) is kept around the ball (p, r), which it then serves; a set that served
 // no search besides that one before the next gathering was a loss: after kNearLosses in a row
 // the path gathers no set for 8 searches, doubling while the losses go on (up to 256) — a path
@@ -777,6 +779,7 @@ void Query::distance_bound(const Vec3d& p, DistanceBest& B, const DistanceStart&
 // next ball, where the tree's search alone is cheaper. Attempts that fail count as gatherings.
 bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
   constexpr double kNearBall = 2.0, kNearSteps = 4.0, kNearAhead = 3.0, kMinScale = 1.0 / 64;
+  constexpr std::uint32_t kNearScaleUpBelow = 8;  // members
   constexpr std::uint32_t kNearLosses = 3, kNearBackoff = 8, kNearBackoffMax = 256;
   if (dnear_backoff_ > 0) {
     --dnear_backoff_;
@@ -809,7 +812,7 @@ bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
     for (int a = 0; a < 3; ++a) c[a] += std::clamp(dmove_[a] * (part * kNearAhead), r - h, h - r);
     ++counters.near_gathered;
     if (ns.gather(t_, c - Vec3d(h, h, h), c + Vec3d(h, h, h), UINT32_MAX, true)) {
-      if (ns.n < kNearMax / 8) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
+      if (ns.n < kNearScaleUpBelow) dnear_scale_ = std::min(1.0, 2 * dnear_scale_);
       return true;
     }
     if (ns.overflowed) dnear_scale_ = std::max(kMinScale, 0.5 * dnear_scale_);
