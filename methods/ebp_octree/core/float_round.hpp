@@ -39,18 +39,27 @@ inline float float_up(double x) {
   return double(f) < x ? next_float_up(f) : f;
 }
 
-/// Floats lo <= x <= hi (x not NaN), each at most three floats beyond float_bounds' tightest
-/// ones, without a branch: x is moved outwards by more than half a float ulp (|x| 2^-23, and
-/// three quarters of the least subnormal near 0) before rounding to nearest, which then cannot
-/// cross x. For the searches' boxes about the query point, where the tightest floats are not
-/// needed: float_bounds' comparison with x goes either way at random, a branch mispredicted half
-/// the time, and costs three times the instructions.
+// Floats below and above x (x not NaN), each at most three floats beyond float_down / float_up's
+// tightest ones, without a branch: x is moved outwards by more than half a float ulp (|x| 2^-23,
+// and three quarters of the least subnormal near 0) before rounding to nearest, which then cannot
+// cross x. For the searches' boxes about the query point, where the tightest floats are not
+// needed: the tight rounding's comparison with x goes either way at random, a branch mispredicted
+// half the time, and costs three times the instructions.
+
+/// The margin. (|x| capped beyond the floats, so that an infinite x does not give inf - inf.)
+inline double float_near_margin(double x) { return std::min(std::fabs(x), 0x1p130) * 0x1p-23 + 0x1.8p-150; }
+/// A float <= x near it. (x beyond the floats: the float beside it.)
+inline float float_down_near(double x) {
+  return std::min(float(x - float_near_margin(x)), std::numeric_limits<float>::max());
+}
+/// A float >= x near it.
+inline float float_up_near(double x) {
+  return std::max(float(x + float_near_margin(x)), -std::numeric_limits<float>::max());
+}
+/// Both.
 inline void float_bounds_near(double x, float* lo, float* hi) {
-  // (|x| capped beyond the floats, so that an infinite x does not give inf - inf)
-  const double m = std::min(std::fabs(x), 0x1p130) * 0x1p-23 + 0x1.8p-150;
-  constexpr float kMax = std::numeric_limits<float>::max();
-  *lo = std::min(float(x - m), kMax);  // (x beyond the floats: the float beside it)
-  *hi = std::max(float(x + m), -kMax);
+  *lo = float_down_near(x);
+  *hi = float_up_near(x);
 }
 
 }  // namespace ebp

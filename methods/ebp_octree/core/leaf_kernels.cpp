@@ -174,10 +174,7 @@ std::uint64_t column_box_pass_baseline(const float* const lo[3], const float* co
 }
 
 void closest_points_baseline(const Vec3d& p, const LeafTri* const t[4], unsigned m, Vec3d q[4], double d2[4]) {
-  for (unsigned i = 0; i < m; ++i) {
-    q[i] = bvhbench::closest_point_on_triangle(p, to_d(t[i]->a), to_d(t[i]->b), to_d(t[i]->c));
-    d2[i] = squared_norm(q[i] - p);
-  }
+  for (unsigned i = 0; i < m; ++i) q[i] = exact_closest_point(p, *t[i], &d2[i]);
 }
 
 void box_distances_baseline(const BlockBox* boxes, std::uint32_t n, const Vec3d& p, double* d2) {
@@ -481,8 +478,7 @@ EBP_AVX2 void closest_points_avx2(const Vec3d& p, const LeafTri* const t[4], uns
       unsigned(_mm256_movemask_pd(_mm256_andnot_pd(any_case, _mm256_cmp_pd(denom, Z, _CMP_NGT_UQ))));
   for (unsigned i = 0; i < m; ++i) {
     if (fallback >> i & 1u) {
-      q[i] = bvhbench::closest_point_on_triangle(p, to_d(r[i]->a), to_d(r[i]->b), to_d(r[i]->c));
-      d2[i] = squared_norm(q[i] - p);
+      q[i] = exact_closest_point(p, *r[i], &d2[i]);
     } else {
       q[i] = Vec3d(qx[i], qy[i], qz[i]);
       d2[i] = dd[i];

@@ -15,6 +15,7 @@
 
 #include "harness/core/geometry.hpp"
 #include "methods/ebp_octree/core/face_normal.hpp"
+#include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 
@@ -120,13 +121,21 @@ struct LeafKernelTable {
   /// taken exactly as doubles): q[i] = closest_point_on_triangle(p, a, b, c) and d2[i] =
   /// squared_norm(q[i] - p), bit for bit (the same double operations lane by lane, the same
   /// order of the cases; a zero-area triangle that reaches the scalar's fall-back gets it). The
-  /// near start's exact tests, four at a time.
+  /// distance search's exact tests (near start and leaf scan), four at a time.
   void (*closest_points)(const Vec3d& p, const LeafTri* const t[4], unsigned m, Vec3d q[4], double d2[4]);
   LeafKernels kind;
 };
 
 /// The kernels in use.
 const LeafKernelTable& leaf_kernel_table();
+
+/// The exact closest point of p on LeafTri t (its float vertices taken exactly as doubles), and
+/// its squared distance from p in *d2: the scalar test that closest_points gives lane by lane.
+inline Vec3d exact_closest_point(const Vec3d& p, const LeafTri& t, double* d2) {
+  const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
+  *d2 = squared_norm(q - p);
+  return q;
+}
 
 /// The limit on distance_pass's box value for a running best distance whose square is best2:
 /// a box value above it (or above it rounded up to float) is strictly farther than the best.

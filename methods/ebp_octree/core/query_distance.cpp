@@ -176,10 +176,10 @@ class Query::DistanceSearch {
     // no once-per-query stamp, only the seed's exclusion.
     const std::uint32_t seed = s.seed_tri < t_.tris.size() ? tris[s.seed_tri].tri() : UINT32_MAX;
     point_bounds();
-    float g2[kNearMax];
     // The survivors' exact tests four at a time (ExactTests), in member order, each batch taking
     // the members still within the limit of the best the batches before it left.
     ExactTests exact;
+    float g2[kNearMax];
     std::uint64_t mask[kNearMaskWords];
     ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2, mask);
     for (std::uint32_t w = 0; w < kNearMaskWords; ++w)
@@ -239,9 +239,15 @@ class Query::DistanceSearch {
   /// the best becomes it if it is smaller by (squared distance, key).
   void test_triangle(std::uint32_t k, std::uint32_t leaf) {
     const LeafTri& t = tris[k];
-    if (stamp_[t.tri()] == qid) return;
+    if (first_test(t)) evaluate(t, k, leaf);
+  }
+
+  /// Whether this is the query's first test of t's input triangle (a triangle listed in several
+  /// leaves is tested once); marks it tested.
+  bool first_test(const LeafTri& t) {
+    if (stamp_[t.tri()] == qid) return false;
     stamp_[t.tri()] = qid;
-    evaluate(t, k, leaf);
+    return true;
   }
 
   /// Exact tests waiting to run as one batch of the closest_points kernel: its four-lane double
@@ -284,8 +290,9 @@ class Query::DistanceSearch {
   /// or the renewal's collector. The key (a load from an array over all triangles, out of core)
   /// is read only when it can decide.
   void evaluate(const LeafTri& t, std::uint32_t k, std::uint32_t leaf) {
-    const Vec3d q = bvhbench::closest_point_on_triangle(p, to_d(t.a), to_d(t.b), to_d(t.c));
-    offer(t, k, leaf, q, squared_norm(q - p));
+    double d2;
+    const Vec3d q = exact_closest_point(p, t, &d2);
+    offer(t, k, leaf, q, d2);
   }
 
   /// evaluate's work after the exact closest point q of LeafTri k (its squared distance d2).
@@ -402,9 +409,7 @@ class Query::DistanceSearch {
       update_limits(lp.eps_p);
       if (plane_abs[i] > plane_lim_ || box_d2[i] > box_lim_) continue;
       const LeafTri& t = tris[k0 + i];
-      if (stamp_[t.tri()] == qid) continue;
-      stamp_[t.tri()] = qid;
-      add_exact(exact, t, k0 + i, lp.li, scan_node);
+      if (first_test(t)) add_exact(exact, t, k0 + i, lp.li, scan_node);
     }
     finish_exact(exact);
   }
@@ -640,7 +645,7 @@ class Query::DistanceSearch {
   double tol = 0;
   double lim2 = std::numeric_limits<double>::infinity();  ///< (best + tol)^2
   float fx = 0, fy = 0, fz = 0;  ///< p in the root's frame, in float (the planes' frame)
-  float q_lo[3], q_hi[3];        ///< floats about p, within 2 ulps (the triangle pre-filter's boxes)
+  float q_lo[3], q_hi[3];        ///< floats about p, at most 3 beyond the tightest (the pre-filter's boxes)
   bool q_bounds_ = false;        ///< q_lo, q_hi computed
   // the triangle pre-filter's limits (distance_prefilter_limits), for the best and the leaf
   // (eps_p) they were computed for

@@ -143,10 +143,10 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
   const float pl[3] = {float(p.x - double(lf.centre[0])), float(p.y - double(lf.centre[1])),
                        float(p.z - double(lf.centre[2]))};
   const float eps = lf.eps;
-  float f0[3], f1[3], unused;  // the segment's box, rounded outwards to float
+  float f0[3], f1[3];  // the segment's box, rounded outwards to float
   for (int a = 0; a < 3; ++a) {
-    float_bounds_near(std::min(p[a], q[a]), &f0[a], &unused);
-    float_bounds_near(std::max(p[a], q[a]), &unused, &f1[a]);
+    f0[a] = float_down_near(std::min(p[a], q[a]));
+    f1[a] = float_up_near(std::max(p[a], q[a]));
   }
 #if defined(__SSE2__)
   // Lane 3 of the triangle's vertex rows below is not a coordinate and always passes.
@@ -234,10 +234,10 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
   const Vec3d& q = prev_p_;
   const Vec3d s0{std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)};
   const Vec3d s1{std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)};
-  float f0[3], f1[3], unused;  // S rounded outwards to float
+  float f0[3], f1[3];  // S rounded outwards to float
   for (int a = 0; a < 3; ++a) {
-    float_bounds_near(s0[a], &f0[a], &unused);
-    float_bounds_near(s1[a], &unused, &f1[a]);
+    f0[a] = float_down_near(s0[a]);
+    f1[a] = float_up_near(s1[a]);
   }
   // The step's near set, or the coherent distance's (it holds every triangle meeting its box
   // too, the zero-area ones included, which cross nothing), or a new step's near set.
