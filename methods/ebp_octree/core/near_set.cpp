@@ -10,8 +10,15 @@
 
 namespace ebp {
 
+namespace {
+constexpr std::uint32_t kSlots = 2 * kNearMax;
+constexpr int kSlotBits = __builtin_ctz(kSlots);
+static_assert((kSlots & (kSlots - 1)) == 0, "a power of two: the hash's top bits index the slots");
+}  // namespace
+
 bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node,
-                     bool with_degenerate) {
+                     bool with_degenerate, std::uint32_t max_members) {
+  max_members = std::min(max_members, kNearMax);
   valid = false;
   overflowed = false;
   n = 0;
@@ -39,21 +46,25 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   const LeafKernelTable& K = leaf_kernel_table();
   bool ok = true;
   // A triangle listed in two of the cells is kept once: an open-addressed set of input indices
-  // (at most kNearMax + 1 entries in 2 kNearMax slots: never full).
-  constexpr std::uint32_t kSlots = 2 * kNearMax;
-  constexpr int kSlotBits = __builtin_ctz(kSlots);
-  static_assert((kSlots & (kSlots - 1)) == 0, "a power of two: the hash's top bits index the slots");
+  // (at most max_members + 1 entries in at least 2 max_members slots: never full).
+  const int slot_bits = max_members <= kNearMax / 2 ? kSlotBits - 1 : kSlotBits;
+  const std::uint32_t slot_mask = (1u << slot_bits) - 1;
   std::uint32_t seen[kSlots];
-  if (several) std::fill(seen, seen + kSlots, UINT32_MAX);
+  if (several) {  // (two constant sizes: the compiler writes each inline)
+    if (slot_bits == kSlotBits)
+      std::fill(seen, seen + kSlots, UINT32_MAX);
+    else
+      std::fill(seen, seen + kSlots / 2, UINT32_MAX);
+  }
   auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni) {
     const LeafTri& tr = tris[kk];
     if (several) {
-      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> (32 - kSlotBits);  // Fibonacci hashing
-      for (h %= kSlots; seen[h] != UINT32_MAX; h = (h + 1) % kSlots)
+      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> (32 - slot_bits);  // Fibonacci hashing
+      for (; seen[h] != UINT32_MAX; h = (h + 1) & slot_mask)
         if (seen[h] == tr.tri()) return;
       seen[h] = tr.tri();
     }
-    if (n == kNearMax) {
+    if (n == max_members) {
       ok = false;
       overflowed = true;
       return;
@@ -101,14 +112,16 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   return true;
 }
 
-void NearSet::within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax],
-                     std::uint64_t mask[kNearMaskWords]) const {
-  for (std::uint32_t w = 0; w < kNearMaskWords; ++w) {
-    const std::uint32_t first = 64 * w, count = n > first ? std::min<std::uint32_t>(64, n - first) : 0;
+std::uint32_t NearSet::within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax],
+                              std::uint64_t mask[kNearMaskWords]) const {
+  const std::uint32_t words = (n + 63) / 64;
+  for (std::uint32_t w = 0; w < words; ++w) {
+    const std::uint32_t first = 64 * w, count = std::min<std::uint32_t>(64, n - first);
     const float* const lo[3] = {blo[0] + first, blo[1] + first, blo[2] + first};
     const float* const hi[3] = {bhi[0] + first, bhi[1] + first, bhi[2] + first};
-    mask[w] = count > 0 ? leaf_kernel_table().column_box_pass(lo, hi, count, q_lo, q_hi, box_lim, g2 + first) : 0;
+    mask[w] = leaf_kernel_table().column_box_pass(lo, hi, count, q_lo, q_hi, box_lim, g2 + first);
   }
+  return words;
 }
 
 }  // namespace ebp

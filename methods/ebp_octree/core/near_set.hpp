@@ -15,18 +15,21 @@
 
 namespace ebp {
 
-/// The most members: 128 (was 64; with the members' box pre-filter eight at a time, the larger
-/// sets serve where triangles are small: 32M bunny contact +6-8 % q/s, 4M at 0.5 mm -16 %
-/// instructions, 4M at 0.2 mm the same time).
-inline constexpr std::uint32_t kNearMax = 128;
+/// The most members a set can hold: 256. Each gathering names its own limit (at most this): the
+/// inside query's sets hold up to 128, the distance's 128 or 256 by the path's scale
+/// (Query::gather_distance_near).
+inline constexpr std::uint32_t kNearMax = 256;
 /// The 64-bit words of a mask with one bit per member.
 inline constexpr std::uint32_t kNearMaskWords = kNearMax / 64;
 
 struct NearSet {
   bool valid = false;
-  bool overflowed = false;  ///< the last gather failed because more than kNearMax triangles meet its box
+  bool overflowed = false;  ///< the last gather failed because more than its max_members triangles meet its box
   float lo[3], hi[3];
   std::uint32_t n = 0;  ///< triangles; slots [n, n rounded up to 8) hold empty boxes
+  // (columns of kNearMax whatever the limit: each member's slots are at constant offsets from
+  // the set; columns allocated to each set's own limit cost 2 % more instructions a search, the
+  // gathering's nine column pointers spilled to the stack)
   alignas(32) float blo[3][kNearMax];
   alignas(32) float bhi[3][kNearMax];
   std::uint32_t k[kNearMax];     ///< LeafTri index
@@ -49,11 +52,13 @@ struct NearSet {
 
   /// Gathers the set of [glo, ghi] (rounded outwards to float). The box must lie in the union of
   /// at most 2 closed leaf-grid cells per axis (checked exactly against the cell boundaries) and
-  /// meet at most kNearMax triangles; otherwise returns false and the set is invalid.
+  /// meet at most max_members (<= kNearMax) triangles; otherwise returns false and the set is
+  /// invalid.
   /// `leaf_node`, if not UINT32_MAX, is the node of the leaf-grid cell holding glo (saves a
   /// descent when the box lies in one cell). with_degenerate: zero-area triangles too (they
   /// cross nothing, so the inside query leaves them out; a distance does not).
-  bool gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node, bool with_degenerate);
+  bool gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node, bool with_degenerate,
+              std::uint32_t max_members);
 
   /// Calls f(j) for every member j whose box meets the closed box [f0, f1], in member order;
   /// stops early (returning false) when f returns false.
@@ -62,9 +67,10 @@ struct NearSet {
 
   /// The distance search's box pre-filter over every member at once (leaf_kernels.hpp,
   /// column_box_pass, 64 members a call): writes each member's box value from [q_lo, q_hi] to g2
-  /// and the bit mask of those within box_lim to `mask` (member j: bit j % 64 of word j / 64).
-  void within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax],
-              std::uint64_t mask[kNearMaskWords]) const;
+  /// and the bit mask of those within box_lim to `mask` (member j: bit j % 64 of word j / 64);
+  /// returns the words written, ceil(n / 64).
+  std::uint32_t within(const float q_lo[3], const float q_hi[3], float box_lim, float g2[kNearMax],
+                       std::uint64_t mask[kNearMaskWords]) const;
 };
 
 static_assert(kNearMax % 64 == 0, "members padded to 8 in columns; one bit each in 64-bit words");

@@ -137,6 +137,8 @@ class Query {
   /// near sets a coherent query allocates on first use (counted whether allocated yet or not,
   /// so that a budget that counts this is never exceeded later).
   std::size_t state_bytes() const;
+  /// The coherent distance's current near set, if one was gathered (tests, diagnostics).
+  const NearSet* distance_near_set() const { return dnear_.get(); }
   QueryCounters counters;
 
  private:
@@ -156,11 +158,14 @@ class Query {
   bool step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* w);
   bool gather_near(const Vec3d& s0, const Vec3d& s1, const Vec3d& step, std::uint32_t leaf_node);
   // The near sets are allocated on first use: an out-of-core page has a Query of its own, and
-  // most pages never need one (2.3 KB each).
+  // most pages never need one (9.2 KB each).
   static NearSet& allocated(std::unique_ptr<NearSet>& s) {
     if (!s) s = std::make_unique<NearSet>();
     return *s;
   }
+  // A step's set holds up to 128 triangles, the limit it was measured with; the distance's up to
+  // kNearMax (gather_distance_near: its limit follows the path's scale).
+  static constexpr std::uint32_t kNearInsideMembers = 128;
   static bool holds(const std::unique_ptr<NearSet>& s, const float f0[3], const float f1[3]) {
     return s && s->holds(f0, f1);
   }

@@ -295,7 +295,7 @@ bool Query::step_from_prev(const Vec3d& p, std::uint32_t leaf_node, int* wout) {
 // are tested by their (derived) boxes, then the triangles of the blocks that meet it by their own
 // (box_pass), and an input triangle listed in two leaves is kept once. Fails (valid = false)
 // when the box spans more cells, a cell is an out-of-core page's stand-in for another page (an
-// empty node that is not the cell's ancestor), or more than kNearMax triangles meet it
+// empty node that is not the cell's ancestor), or more than kNearInsideMembers triangles meet it
 // (NearSet::gather, near_set.hpp).
 bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, const Vec3d& step, std::uint32_t leaf_node) {
   const double cell = t_.cell_size(t_.leaf_level);
@@ -309,7 +309,8 @@ bool Query::gather_near(const Vec3d& s0, const Vec3d& s1, const Vec3d& step, std
     g1[a] = std::max({s1[a] + margin, s1[a], ahead + margin});
   }
   NearSet& ns = allocated(near_);
-  return ns.gather(t_, g0, g1, leaf_node, false) || ns.gather(t_, s0, s1, leaf_node, false);
+  return ns.gather(t_, g0, g1, leaf_node, false, kNearInsideMembers) ||
+         ns.gather(t_, s0, s1, leaf_node, false, kNearInsideMembers);
 }
 
 bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std::uint32_t node) {

@@ -70,8 +70,10 @@ std::vector<Vec3d> contact_in_frame(const Octree& t, const Mesh& m, std::size_t 
 
 // Boxes of several sizes about points near the surface: a gathered set holds exactly the
 // triangles whose float boxes meet its box, each input triangle once; a box wider than two leaf
-// cells is refused, and so is one that meets more than kNearMax triangles.
+// cells is refused, and so is one that meets more than its limit of triangles (both limits the
+// queries use: the set's capacity, and half of it, which takes the smaller table of seen indices).
 TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
+  for (const std::uint32_t limit : {kNearMax / 2, kNearMax})
   for (const char* name : {"cow.obj", "fandisk.obj"}) {
     const Mesh m = bvhbench::load_mesh(shared_mesh(name));
     const Octree t = build(m);
@@ -83,7 +85,7 @@ TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
       const Vec3d p = t.to_frame(pts[i]);
       const double h = cell * std::array<double, 4>{0.01, 0.1, 0.4, 1.5}[i % 4];
       NearSet ns;
-      const bool ok = ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true);
+      const bool ok = ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true, limit);
       std::set<std::uint32_t> want;
       if (h < 0.5 * cell || ok) {
         for (std::size_t k = 0; k < m.triangles.size(); ++k)
@@ -99,12 +101,14 @@ TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
         if (h > 0.5 * cell) {
           ++refused_big;
         } else if (!leaves_root) {
-          EXPECT_GT(want.size(), kNearMax) << name << " point " << i;
+          EXPECT_GT(want.size(), limit) << name << " point " << i;
+          EXPECT_TRUE(ns.overflowed) << name << " point " << i;
         }
         continue;
       }
       ++gathered;
       ASSERT_TRUE(ns.valid);
+      EXPECT_LE(ns.n, limit);
       EXPECT_LE(ns.lo[0], p.x - h);
       EXPECT_GE(ns.hi[2], p.z + h);
       std::set<std::uint32_t> got;
@@ -131,7 +135,7 @@ TEST(EbpNearSet, ZeroAreaTrianglesOnlyWhenAsked) {
   const double h = 1e-3;
   auto members = [&](bool with_degenerate) {
     NearSet ns;
-    EXPECT_TRUE(ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, with_degenerate));
+    EXPECT_TRUE(ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, with_degenerate, kNearMax));
     std::set<std::uint32_t> s;
     for (std::uint32_t j = 0; j < ns.n; ++j) s.insert(t.tris[ns.k[j]].tri());
     return s;
@@ -231,4 +235,31 @@ TEST(EbpNearSet, OutOfCorePagesAnswerBitForBit) {
   const QueryCounters k = ooc.counters();
   EXPECT_GT(k.near_served, path.size() / 3);
   EXPECT_GT(ooc.cache().evictions, 0u);
+}
+
+// Small triangles: where sets of the usual limit overflow until the path's scale is down to a
+// quarter, the distance's sets take up to kNearMax members, and answer bit for bit as the search
+// without coherence and as brute force.
+TEST(EbpNearSet, SmallTrianglesTakeLargerSets) {
+  const Mesh m = bvhbench::test::icosphere(6);  // 81,920 triangles on the unit sphere
+  const Octree t = build(m);
+  std::vector<Vec3d> fv;
+  for (const Vec3d& v : m.vertices) fv.push_back(t.to_frame(v));
+  const Reference ref(fv, m.triangles);
+  const std::vector<Vec3d> path = contact_in_frame(t, m, 2000, 20, 0.3);
+  Query near(t, true), tree(t, false);
+  near.set_certificate(false);
+  std::uint32_t largest = 0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const DistanceAnswer a = near.distance(path[i]);
+    ASSERT_TRUE(same_answer(a, tree.distance(path[i]))) << "query " << i;
+    if (const NearSet* ns = near.distance_near_set(); ns && ns->valid) largest = std::max(largest, ns->n);
+    if (i % 10 == 0) {
+      std::int64_t bt;
+      EXPECT_EQ(std::fabs(a.distance), ref.dist(path[i], &bt)) << "query " << i;
+    }
+  }
+  EXPECT_GT(largest, kNearMax / 2);
+  EXPECT_LE(largest, kNearMax);
+  EXPECT_GT(near.counters.near_served, path.size() / 4);
 }
