@@ -111,7 +111,8 @@ unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], f
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
-unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate) {
+unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate,
+                           TriBox boxes[8]) {
   unsigned hit = 0;
 #if defined(__SSE2__)
   // Lane 3 of the vertex rows is not a coordinate: the box's lane 3 lets it always pass.
@@ -121,6 +122,8 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
     if (!with_degenerate && (t.flags() & kDegenerate)) continue;
     const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
     const __m128 tlo = _mm_min_ps(_mm_min_ps(A, B), C), thi = _mm_max_ps(_mm_max_ps(A, B), C);
+    _mm_storeu_ps(boxes[j].lo, tlo);
+    _mm_storeu_ps(boxes[j].hi, thi);
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(thi, LO), _mm_cmpgt_ps(tlo, HI))) == 0) hit |= 1u << j;
   }
 #else
@@ -130,6 +133,8 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], co
     bool meets = true;
     for (int a = 0; a < 3; ++a) {
       const float tl = std::min(std::min(t.a[a], t.b[a]), t.c[a]), th = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
+      boxes[j].lo[a] = tl;
+      boxes[j].hi[a] = th;
       meets = meets && !(th < lo[a] || tl > hi[a]);
     }
     if (meets) hit |= 1u << j;
@@ -314,26 +319,36 @@ EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[
 }
 
 EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3],
-                               bool with_degenerate) {
+                               bool with_degenerate, TriBox boxes[8]) {
   // Two triangles per register (j in the low half, j + 4 in the high half); lane 3 of each half
   // is not a coordinate and always passes.
   const __m128 lo4 = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), hi4 = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
   const __m256 LO = _mm256_insertf128_ps(_mm256_castps128_ps256(lo4), lo4, 1);
   const __m256 HI = _mm256_insertf128_ps(_mm256_castps128_ps256(hi4), hi4, 1);
   unsigned miss = 0;
+  __m256 tlo[4], thi[4];
   for (unsigned j = 0; j < 4 && j < m; ++j) {
     const __m256 A = rows<offsetof(LeafTri, a)>(blk, m, j), B = rows<offsetof(LeafTri, b)>(blk, m, j),
                  C = rows<offsetof(LeafTri, c)>(blk, m, j);
-    const __m256 tlo = _mm256_min_ps(_mm256_min_ps(A, B), C), thi = _mm256_max_ps(_mm256_max_ps(A, B), C);
-    const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(thi, LO, _CMP_LT_OQ),
-                                                                  _mm256_cmp_ps(tlo, HI, _CMP_GT_OQ))));
+    tlo[j] = _mm256_min_ps(_mm256_min_ps(A, B), C);
+    thi[j] = _mm256_max_ps(_mm256_max_ps(A, B), C);
+    const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(thi[j], LO, _CMP_LT_OQ),
+                                                                  _mm256_cmp_ps(tlo[j], HI, _CMP_GT_OQ))));
     miss |= ((out & 15u) ? 1u : 0u) << j;
     miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
   }
-  if (with_degenerate) return ~miss & low_bits(m);
-  const unsigned deg = unsigned(_mm256_movemask_ps(
-      _mm256_castsi256_ps(_mm256_slli_epi32(gather_tri_flags(blk, m), kDegenerateShift))));
-  return ~(miss | deg) & low_bits(m);
+  unsigned hit = ~miss & low_bits(m);
+  if (!with_degenerate)
+    hit &= ~unsigned(_mm256_movemask_ps(
+        _mm256_castsi256_ps(_mm256_slli_epi32(gather_tri_flags(blk, m), kDegenerateShift))));
+  // The boxes of the hits (most blocks a gathering tests have none): row j's halves are
+  // triangles j and j + 4.
+  if (hit)
+    for (unsigned j = 0; j < 4 && j < m; ++j) {
+      if (hit >> j & 1u) _mm256_storeu_ps(boxes[j].lo, _mm256_permute2f128_ps(tlo[j], thi[j], 0x20));
+      if (hit >> (j + 4) & 1u) _mm256_storeu_ps(boxes[j + 4].lo, _mm256_permute2f128_ps(tlo[j], thi[j], 0x31));
+    }
+  return hit;
 }
 
 

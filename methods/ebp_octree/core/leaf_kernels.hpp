@@ -70,6 +70,11 @@ LeafKernels set_leaf_kernels(LeafKernels k);
 /// Whether this CPU can run the AVX2 kernels.
 bool cpu_has_avx2();
 
+/// A triangle's float bounding box as box_pass computes it (lane 3 of each row unspecified).
+struct TriBox {
+  float lo[4], hi[4];
+};
+
 /// The kernels, as one table: fetch it once per query (leaf_kernel_table()) and call through it.
 struct LeafKernelTable {
   /// Plane pass of the reference path over blk[0, m), 1 <= m <= 8. p = the query point in the
@@ -83,8 +88,10 @@ struct LeafKernelTable {
   /// Box pass of a near set's gathering over blk[0, m), 1 <= m <= 8: the bit mask of the
   /// triangles whose float bounding box (min/max of their float vertices: exact) meets the closed
   /// box [lo, hi]; the kDegenerate ones (zero area) only `with_degenerate` (a distance needs
-  /// them, a segment crosses none).
-  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate);
+  /// them, a segment crosses none). Each triangle j in the mask has its box in boxes[j] (the
+  /// gathering keeps it with the member instead of computing it again).
+  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate,
+                       TriBox boxes[8]);
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);

@@ -56,7 +56,7 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
     else
       std::fill(seen, seen + kSlots / 2, UINT32_MAX);
   }
-  auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni) {
+  auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni, const TriBox& box) {
     const LeafTri& tr = tris[kk];
     if (several) {
       std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> (32 - slot_bits);  // Fibonacci hashing
@@ -74,8 +74,8 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
     leaf[j] = li;
     node[j] = ni;
     for (int a = 0; a < 3; ++a) {
-      blo[a][j] = std::min({tr.a[a], tr.b[a], tr.c[a]});
-      bhi[a][j] = std::max({tr.a[a], tr.b[a], tr.c[a]});
+      blo[a][j] = box.lo[a];
+      bhi[a][j] = box.hi[a];
     }
   };
   for (std::uint32_t z = r0[2]; z <= r1[2] && ok; ++z)
@@ -95,8 +95,11 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
             const std::uint32_t first_in_leaf = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
             const std::uint32_t first = lf.tri_begin + first_in_leaf;
             const unsigned m = std::min(lf.tri_count - first_in_leaf, kBlockTris);
-            for (unsigned hit = K.box_pass(tris + first, m, lo, hi, with_degenerate); hit && ok; hit &= hit - 1)
-              add(first + unsigned(__builtin_ctz(hit)), nd.index, ni);
+            TriBox boxes[8];
+            for (unsigned hit = K.box_pass(tris + first, m, lo, hi, with_degenerate, boxes); hit && ok; hit &= hit - 1) {
+              const unsigned i = unsigned(__builtin_ctz(hit));
+              add(first + i, nd.index, ni, boxes[i]);
+            }
           }
       }
   if (!ok) {

@@ -232,9 +232,18 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(0, std::memcmp(s, want_s, n * sizeof(float))) << name << " kernel " << int(kind);
             ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s2, sides), want_sides) << name << " kernel " << int(kind);
             ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
-            for (const bool with_degenerate : {false, true})
-              ASSERT_EQ(K.box_pass(flagged, n, lo, hi, with_degenerate), want_box[with_degenerate])
+            for (const bool with_degenerate : {false, true}) {
+              TriBox tb[8];
+              const unsigned got = K.box_pass(flagged, n, lo, hi, with_degenerate, tb);
+              ASSERT_EQ(got, want_box[with_degenerate])
                   << name << " kernel " << int(kind) << " with_degenerate " << with_degenerate;
+              for (unsigned j = 0; j < n; ++j)  // each hit's box: the min and max of its vertices
+                for (int a = 0; a < 3 && (got >> j & 1u); ++a) {
+                  const LeafTri& f = flagged[j];
+                  ASSERT_EQ(tb[j].lo[a], std::min({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
+                  ASSERT_EQ(tb[j].hi[a], std::max({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
+                }
+            }
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
             K.box_distances(all, nall, Vec3d(pd[0], pd[1], pd[2]), d2.data());
             ASSERT_EQ(0, std::memcmp(d2.data(), want_d2.data(), nall * sizeof(double))) << name << " kernel " << int(kind);
