@@ -11,25 +11,44 @@
 namespace ebp {
 
 namespace {
-constexpr std::uint32_t kSlots = 2 * kNearMax;
-constexpr int kSlotBits = __builtin_ctz(kSlots);
-static_assert((kSlots & (kSlots - 1)) == 0, "a power of two: the hash's top bits index the slots");
-}  // namespace
 
-bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node,
-                     bool with_degenerate, std::uint32_t max_members) {
-  max_members = std::min(max_members, kNearMax);
-  valid = false;
-  overflowed = false;
-  n = 0;
-  const int L = t.leaf_level;
-  const double cs = t.cell_size(L), inv = 1.0 / cs;
-  const std::int64_t gmax = (std::int64_t(1) << L) - 1;
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = float_down(glo[a]);
-    hi[a] = float_up(ghi[a]);
+/// The input triangles a gathering has kept, when its box spans several cells (a triangle listed
+/// in two of them is kept once): an open-addressed set of input indices, at most max_members + 1
+/// entries in at least 2 max_members slots (never full).
+class SeenTriangles {
+ public:
+  SeenTriangles(std::uint32_t max_members, bool used)
+      : bits_(max_members <= kNearMax / 2 ? kSlotBits - 1 : kSlotBits), mask_((1u << bits_) - 1) {
+    if (!used) return;
+    if (bits_ == kSlotBits)  // (two constant sizes: the compiler writes each inline)
+      std::fill(slots_, slots_ + kSlots, UINT32_MAX);
+    else
+      std::fill(slots_, slots_ + kSlots / 2, UINT32_MAX);
   }
-  std::uint32_t r0[3], r1[3];
+  /// Adds `tri`; false if it was there already.
+  bool insert(std::uint32_t tri) {
+    std::uint32_t h = (tri * 0x9E3779B1u) >> (32 - bits_);  // Fibonacci hashing
+    for (; slots_[h] != UINT32_MAX; h = (h + 1) & mask_)
+      if (slots_[h] == tri) return false;
+    slots_[h] = tri;
+    return true;
+  }
+
+ private:
+  static constexpr std::uint32_t kSlots = 2 * kNearMax;
+  static constexpr int kSlotBits = __builtin_ctz(kSlots);
+  static_assert((kSlots & (kSlots - 1)) == 0, "a power of two: the hash's top bits index the slots");
+  int bits_;
+  std::uint32_t mask_;
+  std::uint32_t slots_[kSlots];
+};
+
+/// The leaf-grid cells [r0, r1] (per axis) whose union holds the closed box [lo, hi], checked
+/// exactly against the cell boundaries; false if that takes more than 2 cells on an axis.
+bool leaf_cells_holding(const Octree& t, const float lo[3], const float hi[3], std::uint32_t r0[3],
+                        std::uint32_t r1[3]) {
+  const double cs = t.cell_size(t.leaf_level), inv = 1.0 / cs;
+  const std::int64_t gmax = (std::int64_t(1) << t.leaf_level) - 1;
   for (int a = 0; a < 3; ++a) {
     auto cell = [&](double v) {
       const double r = std::floor((v - t.root_lo[a]) * inv);
@@ -41,29 +60,31 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
                       double(hi[a]) <= t.root_lo[a] + double(r1[a] + 1) * cs;
     if (!fits) return false;
   }
+  return true;
+}
+
+}  // namespace
+
+bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::uint32_t leaf_node,
+                     bool with_degenerate, std::uint32_t max_members) {
+  max_members = std::min(max_members, kNearMax);
+  valid = false;
+  overflowed = false;
+  n = 0;
+  const int L = t.leaf_level;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = float_down(glo[a]);
+    hi[a] = float_up(ghi[a]);
+  }
+  std::uint32_t r0[3], r1[3];
+  if (!leaf_cells_holding(t, lo, hi, r0, r1)) return false;
   const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
   const LeafTri* tris = t.tris.data();
   const LeafKernelTable& K = leaf_kernel_table();
   bool ok = true;
-  // A triangle listed in two of the cells is kept once: an open-addressed set of input indices
-  // (at most max_members + 1 entries in at least 2 max_members slots: never full).
-  const int slot_bits = max_members <= kNearMax / 2 ? kSlotBits - 1 : kSlotBits;
-  const std::uint32_t slot_mask = (1u << slot_bits) - 1;
-  std::uint32_t seen[kSlots];
-  if (several) {  // (two constant sizes: the compiler writes each inline)
-    if (slot_bits == kSlotBits)
-      std::fill(seen, seen + kSlots, UINT32_MAX);
-    else
-      std::fill(seen, seen + kSlots / 2, UINT32_MAX);
-  }
+  SeenTriangles seen(max_members, several);
   auto add = [&](std::uint32_t kk, std::uint32_t li, std::uint32_t ni, const TriBox& box) {
-    const LeafTri& tr = tris[kk];
-    if (several) {
-      std::uint32_t h = (tr.tri() * 0x9E3779B1u) >> (32 - slot_bits);  // Fibonacci hashing
-      for (; seen[h] != UINT32_MAX; h = (h + 1) & slot_mask)
-        if (seen[h] == tr.tri()) return;
-      seen[h] = tr.tri();
-    }
+    if (several && !seen.insert(tris[kk].tri())) return;
     if (n == max_members) {
       ok = false;
       overflowed = true;
