@@ -73,53 +73,54 @@ std::vector<Vec3d> contact_in_frame(const Octree& t, const Mesh& m, std::size_t 
 // cells is refused, and so is one that meets more than its limit of triangles (both limits the
 // queries use: the set's capacity, and half of it, which takes the smaller table of seen indices).
 TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
-  for (const std::uint32_t limit : {kNearMax / 2, kNearMax})
-  for (const char* name : {"cow.obj", "fandisk.obj"}) {
-    const Mesh m = bvhbench::load_mesh(shared_mesh(name));
-    const Octree t = build(m);
-    const Reference ref(m.vertices, m.triangles);
-    const double cell = t.cell_size(t.leaf_level);
-    const auto pts = sample_points(ref, 0, 200, 3);
-    int gathered = 0, refused_big = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      const Vec3d p = t.to_frame(pts[i]);
-      const double h = cell * std::array<double, 4>{0.01, 0.1, 0.4, 1.5}[i % 4];
-      NearSet ns;
-      const bool ok = ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true, limit);
-      std::set<std::uint32_t> want;
-      if (h < 0.5 * cell || ok) {
-        for (std::size_t k = 0; k < m.triangles.size(); ++k)
-          if (box_meets(t, m, k, ns.lo, ns.hi)) want.insert(std::uint32_t(k));
-      }
-      if (!ok) {
-        EXPECT_FALSE(ns.valid);
-        // refused only for a reason: more than two cells on an axis, a box leaving the root
-        // cube, or too many triangles
-        bool leaves_root = false;
-        for (int a = 0; a < 3; ++a)
-          leaves_root |= p[a] - h < t.root_lo[a] || p[a] + h > t.root_lo[a] + t.root_size;
-        if (h > 0.5 * cell) {
-          ++refused_big;
-        } else if (!leaves_root) {
-          EXPECT_GT(want.size(), limit) << name << " point " << i;
-          EXPECT_TRUE(ns.overflowed) << name << " point " << i;
+  for (const std::uint32_t limit : {kNearMax / 2, kNearMax}) {
+    for (const char* name : {"cow.obj", "fandisk.obj"}) {
+      const Mesh m = bvhbench::load_mesh(shared_mesh(name));
+      const Octree t = build(m);
+      const Reference ref(m.vertices, m.triangles);
+      const double cell = t.cell_size(t.leaf_level);
+      const auto pts = sample_points(ref, 0, 200, 3);
+      int gathered = 0, refused_big = 0;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const Vec3d p = t.to_frame(pts[i]);
+        const double h = cell * std::array<double, 4>{0.01, 0.1, 0.4, 1.5}[i % 4];
+        NearSet ns;
+        const bool ok = ns.gather(t, p - Vec3d(h, h, h), p + Vec3d(h, h, h), UINT32_MAX, true, limit);
+        std::set<std::uint32_t> want;
+        if (h < 0.5 * cell || ok) {
+          for (std::size_t k = 0; k < m.triangles.size(); ++k)
+            if (box_meets(t, m, k, ns.lo, ns.hi)) want.insert(std::uint32_t(k));
         }
-        continue;
+        if (!ok) {
+          EXPECT_FALSE(ns.valid);
+          // refused only for a reason: more than two cells on an axis, a box leaving the root
+          // cube, or too many triangles
+          bool leaves_root = false;
+          for (int a = 0; a < 3; ++a)
+            leaves_root |= p[a] - h < t.root_lo[a] || p[a] + h > t.root_lo[a] + t.root_size;
+          if (h > 0.5 * cell) {
+            ++refused_big;
+          } else if (!leaves_root) {
+            EXPECT_GT(want.size(), limit) << name << " point " << i;
+            EXPECT_TRUE(ns.overflowed) << name << " point " << i;
+          }
+          continue;
+        }
+        ++gathered;
+        ASSERT_TRUE(ns.valid);
+        EXPECT_LE(ns.n, limit);
+        EXPECT_LE(ns.lo[0], p.x - h);
+        EXPECT_GE(ns.hi[2], p.z + h);
+        std::set<std::uint32_t> got;
+        for (std::uint32_t j = 0; j < ns.n; ++j) {
+          EXPECT_TRUE(got.insert(t.tris[ns.k[j]].tri()).second) << name << ": a triangle twice";
+          EXPECT_EQ(t.nodes[ns.node[j]].index, ns.leaf[j]);
+        }
+        EXPECT_EQ(got, want) << name << " point " << i << " half-width " << h;
       }
-      ++gathered;
-      ASSERT_TRUE(ns.valid);
-      EXPECT_LE(ns.n, limit);
-      EXPECT_LE(ns.lo[0], p.x - h);
-      EXPECT_GE(ns.hi[2], p.z + h);
-      std::set<std::uint32_t> got;
-      for (std::uint32_t j = 0; j < ns.n; ++j) {
-        EXPECT_TRUE(got.insert(t.tris[ns.k[j]].tri()).second) << name << ": a triangle twice";
-        EXPECT_EQ(t.nodes[ns.node[j]].index, ns.leaf[j]);
-      }
-      EXPECT_EQ(got, want) << name << " point " << i << " half-width " << h;
+      EXPECT_GT(gathered, 80) << name;
+      EXPECT_GT(refused_big, 0) << name;
     }
-    EXPECT_GT(gathered, 80) << name;
-    EXPECT_GT(refused_big, 0) << name;
   }
 }
 
