@@ -8,6 +8,7 @@
 #include "methods/ebp_octree/core/predicates.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -111,36 +112,41 @@ unsigned plane_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], f
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
-unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate,
-                           TriBox boxes[8]) {
-  unsigned hit = 0;
-#if defined(__SSE2__)
-  // Lane 3 of the vertex rows is not a coordinate: the box's lane 3 lets it always pass.
-  const __m128 LO = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), HI = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
+unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const GatherTest& g, BlockTriBoxes& boxes,
+                           unsigned* on_seam) {
+  unsigned hit = 0, seam = 0;
   for (unsigned j = 0; j < m; ++j) {
     const LeafTri& t = blk[j];
-    if (!with_degenerate && (t.flags() & kDegenerate)) continue;
-    const __m128 A = _mm_loadu_ps(t.a), B = _mm_loadu_ps(t.b), C = _mm_loadu_ps(t.c);
-    const __m128 tlo = _mm_min_ps(_mm_min_ps(A, B), C), thi = _mm_max_ps(_mm_max_ps(A, B), C);
-    _mm_storeu_ps(boxes[j].lo, tlo);
-    _mm_storeu_ps(boxes[j].hi, thi);
-    if (_mm_movemask_ps(_mm_or_ps(_mm_cmplt_ps(thi, LO), _mm_cmpgt_ps(tlo, HI))) == 0) hit |= 1u << j;
-  }
-#else
-  for (unsigned j = 0; j < m; ++j) {
-    const LeafTri& t = blk[j];
-    if (!with_degenerate && (t.flags() & kDegenerate)) continue;
-    bool meets = true;
+    bool meets = g.with_degenerate || !(t.flags() & kDegenerate), across = false;
     for (int a = 0; a < 3; ++a) {
       const float tl = std::min(std::min(t.a[a], t.b[a]), t.c[a]), th = std::max(std::max(t.a[a], t.b[a]), t.c[a]);
-      boxes[j].lo[a] = tl;
-      boxes[j].hi[a] = th;
-      meets = meets && !(th < lo[a] || tl > hi[a]);
+      boxes.lo[a][j] = tl;
+      boxes.hi[a][j] = th;
+      meets = meets && !(th < g.lo[a] || tl > g.hi[a]);
+      across = across || (tl <= g.seam_hi[a] && th >= g.seam_lo[a]);
     }
-    if (meets) hit |= 1u << j;
+    hit |= unsigned(meets) << j;
+    seam |= unsigned(meets && across) << j;
   }
-#endif
+  *on_seam = seam;
   return hit;
+}
+
+std::uint32_t append_members_baseline(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first,
+                                      std::uint32_t leaf, std::uint32_t node, const MemberColumns& out,
+                                      std::uint32_t n) {
+  const std::uint32_t n0 = n;
+  for (; keep; keep &= keep - 1, ++n) {
+    const unsigned j = unsigned(__builtin_ctz(keep));
+    for (int a = 0; a < 3; ++a) {
+      out.lo[a][n] = boxes.lo[a][j];
+      out.hi[a][n] = boxes.hi[a][j];
+    }
+    out.k[n] = first + j;
+    out.leaf[n] = leaf;
+    out.node[n] = node;
+  }
+  return n - n0;
 }
 
 unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
@@ -318,39 +324,58 @@ EBP_AVX2 unsigned plane_pass_avx2(const LeafTri* blk, unsigned m, const float p[
   return ~((gt & pos) | (lt & ~pos) | deg) & low_bits(m);
 }
 
-EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3],
-                               bool with_degenerate, TriBox boxes[8]) {
-  // Two triangles per register (j in the low half, j + 4 in the high half); lane 3 of each half
-  // is not a coordinate and always passes.
-  const __m128 lo4 = _mm_setr_ps(lo[0], lo[1], lo[2], -kInf), hi4 = _mm_setr_ps(hi[0], hi[1], hi[2], kInf);
-  const __m256 LO = _mm256_insertf128_ps(_mm256_castps128_ps256(lo4), lo4, 1);
-  const __m256 HI = _mm256_insertf128_ps(_mm256_castps128_ps256(hi4), hi4, 1);
-  unsigned miss = 0;
-  __m256 tlo[4], thi[4];
-  for (unsigned j = 0; j < 4 && j < m; ++j) {
-    const __m256 A = rows<offsetof(LeafTri, a)>(blk, m, j), B = rows<offsetof(LeafTri, b)>(blk, m, j),
-                 C = rows<offsetof(LeafTri, c)>(blk, m, j);
-    tlo[j] = _mm256_min_ps(_mm256_min_ps(A, B), C);
-    thi[j] = _mm256_max_ps(_mm256_max_ps(A, B), C);
-    const unsigned out = unsigned(_mm256_movemask_ps(_mm256_or_ps(_mm256_cmp_ps(thi[j], LO, _CMP_LT_OQ),
-                                                                  _mm256_cmp_ps(tlo[j], HI, _CMP_GT_OQ))));
-    miss |= ((out & 15u) ? 1u : 0u) << j;
-    miss |= ((out >> 4) ? 1u : 0u) << (j + 4);
+EBP_AVX2 unsigned box_pass_avx2(const LeafTri* blk, unsigned m, const GatherTest& g, BlockTriBoxes& boxes,
+                               unsigned* on_seam) {
+  __m256 a[4], b[4], c[4];
+  columns<offsetof(LeafTri, a)>(blk, m, a);  // ax, ay, az (lane 3: bx, unused)
+  columns<offsetof(LeafTri, b)>(blk, m, b);
+  columns<offsetof(LeafTri, c)>(blk, m, c);
+  __m256 out = _mm256_setzero_ps(), across = _mm256_setzero_ps();
+  for (int k = 0; k < 3; ++k) {
+    const __m256 lo = _mm256_min_ps(_mm256_min_ps(a[k], b[k]), c[k]), hi = _mm256_max_ps(_mm256_max_ps(a[k], b[k]), c[k]);
+    _mm256_store_ps(boxes.lo[k], lo);
+    _mm256_store_ps(boxes.hi[k], hi);
+    out = _mm256_or_ps(out, _mm256_or_ps(_mm256_cmp_ps(hi, _mm256_set1_ps(g.lo[k]), _CMP_LT_OQ),
+                                         _mm256_cmp_ps(lo, _mm256_set1_ps(g.hi[k]), _CMP_GT_OQ)));
+    across = _mm256_or_ps(across, _mm256_and_ps(_mm256_cmp_ps(lo, _mm256_set1_ps(g.seam_hi[k]), _CMP_LE_OQ),
+                                                _mm256_cmp_ps(hi, _mm256_set1_ps(g.seam_lo[k]), _CMP_GE_OQ)));
   }
-  unsigned hit = ~miss & low_bits(m);
-  if (!with_degenerate)
+  unsigned hit = ~unsigned(_mm256_movemask_ps(out)) & low_bits(m);
+  if (!g.with_degenerate)
     hit &= ~unsigned(_mm256_movemask_ps(
         _mm256_castsi256_ps(_mm256_slli_epi32(gather_tri_flags(blk, m), kDegenerateShift))));
-  // The boxes of the hits (most blocks a gathering tests have none): row j's halves are
-  // triangles j and j + 4.
-  if (hit)
-    for (unsigned j = 0; j < 4 && j < m; ++j) {
-      if (hit >> j & 1u) _mm256_storeu_ps(boxes[j].lo, _mm256_permute2f128_ps(tlo[j], thi[j], 0x20));
-      if (hit >> (j + 4) & 1u) _mm256_storeu_ps(boxes[j + 4].lo, _mm256_permute2f128_ps(tlo[j], thi[j], 0x31));
-    }
+  *on_seam = hit & unsigned(_mm256_movemask_ps(across));
   return hit;
 }
 
+/// For each mask of 8 lanes, its set lanes in order, packed 4 bits each (the permutation that
+/// moves them to the front).
+constexpr std::array<std::uint32_t, 256> left_pack_table() {
+  std::array<std::uint32_t, 256> t{};
+  for (unsigned mask = 0; mask < 256; ++mask) {
+    unsigned slot = 0;
+    for (unsigned lane = 0; lane < 8; ++lane)
+      if (mask >> lane & 1u) t[mask] |= lane << (4 * slot++);
+  }
+  return t;
+}
+constexpr std::array<std::uint32_t, 256> kLeftPack = left_pack_table();
+
+EBP_AVX2 std::uint32_t append_members_avx2(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first,
+                                           std::uint32_t leaf, std::uint32_t node, const MemberColumns& out,
+                                           std::uint32_t n) {
+  const __m256i lanes = _mm256_and_si256(
+      _mm256_srlv_epi32(_mm256_set1_epi32(int(kLeftPack[keep & 255u])), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+      _mm256_set1_epi32(15));
+  for (int a = 0; a < 3; ++a) {
+    _mm256_storeu_ps(out.lo[a] + n, _mm256_permutevar8x32_ps(_mm256_load_ps(boxes.lo[a]), lanes));
+    _mm256_storeu_ps(out.hi[a] + n, _mm256_permutevar8x32_ps(_mm256_load_ps(boxes.hi[a]), lanes));
+  }
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.k + n), _mm256_add_epi32(_mm256_set1_epi32(int(first)), lanes));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.leaf + n), _mm256_set1_epi32(int(leaf)));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.node + n), _mm256_set1_epi32(int(node)));
+  return std::uint32_t(__builtin_popcount(keep & 255u));
+}
 
 EBP_AVX2 unsigned distance_pass_avx2(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
                                      const float q_hi[3], float plane_lim, float box_lim, float plane_abs[8],
@@ -594,14 +619,14 @@ EBP_AVX2 unsigned edge_signs_avx2(const Vec3d& p, const Vec3d& q, const float a[
 LeafKernelTable make(LeafKernels k) {
 #if defined(EBP_X86)
   if (k == LeafKernels::avx2 && cpu_has_avx2())
-    return {plane_pass_avx2,    box_pass_avx2,      block_pass_avx2,        box_distances_avx2,
-            edge_signs_avx2,    distance_pass_avx2, column_box_pass_avx2,   closest_points_avx2,
-            LeafKernels::avx2};
+    return {plane_pass_avx2,      box_pass_avx2,     append_members_avx2,  block_pass_avx2,
+            box_distances_avx2,   edge_signs_avx2,   distance_pass_avx2,   column_box_pass_avx2,
+            closest_points_avx2,  LeafKernels::avx2};
 #endif
   (void)k;
-  return {plane_pass_baseline, box_pass_baseline,      block_pass_baseline,        box_distances_baseline,
-          edge_signs_baseline, distance_pass_baseline, column_box_pass_baseline, closest_points_baseline,
-          LeafKernels::baseline};
+  return {plane_pass_baseline,    box_pass_baseline,      append_members_baseline,  block_pass_baseline,
+          box_distances_baseline, edge_signs_baseline,    distance_pass_baseline,   column_box_pass_baseline,
+          closest_points_baseline, LeafKernels::baseline};
 }
 
 LeafKernelTable& current() {

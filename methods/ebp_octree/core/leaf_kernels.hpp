@@ -70,9 +70,32 @@ LeafKernels set_leaf_kernels(LeafKernels k);
 /// Whether this CPU can run the AVX2 kernels.
 bool cpu_has_avx2();
 
-/// A triangle's float bounding box as box_pass computes it (lane 3 of each row unspecified).
-struct TriBox {
-  float lo[4], hi[4];
+/// What a near set's gathering tests a block's triangles against (box_pass).
+struct GatherTest {
+  float lo[3], hi[3];  ///< the gathering's box: a triangle is kept when its float box meets it
+  /// Per axis, a slab about the boundary between the gathering's two leaf-grid cells on that
+  /// axis (an empty one, lo +inf and hi -inf, where it spans one cell): a kept triangle whose
+  /// box meets no slab is listed in one of the gathering's cells only, so it needs no test
+  /// against the triangles kept before it.
+  float seam_lo[3], seam_hi[3];
+  bool with_degenerate;  ///< keep zero-area triangles too (a distance needs them; a segment crosses none)
+};
+
+/// The float bounding boxes of a block's triangles as columns (box_pass): lane j is triangle j.
+struct BlockTriBoxes {
+  alignas(32) float lo[3][8];
+  alignas(32) float hi[3][8];
+};
+
+/// The columns a gathering appends its members to (a near set's, near_set.hpp): each member's
+/// box, LeafTri index, leaf and node. Each column has room for 8 slots past the last member
+/// it may hold (append_members writes 8 slots whatever it appends).
+struct MemberColumns {
+  float* lo[3];
+  float* hi[3];
+  std::uint32_t* k;
+  std::uint32_t* leaf;
+  std::uint32_t* node;
 };
 
 /// The kernels, as one table: fetch it once per query (leaf_kernel_table()) and call through it.
@@ -87,11 +110,16 @@ struct LeafKernelTable {
   unsigned (*plane_pass)(const LeafTri* blk, unsigned m, const float p[3], float eps, float s[8], unsigned ref_sides);
   /// Box pass of a near set's gathering over blk[0, m), 1 <= m <= 8: the bit mask of the
   /// triangles whose float bounding box (min/max of their float vertices: exact) meets the closed
-  /// box [lo, hi]; the kDegenerate ones (zero area) only `with_degenerate` (a distance needs
-  /// them, a segment crosses none). Each triangle j in the mask has its box in boxes[j] (the
-  /// gathering keeps it with the member instead of computing it again).
-  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const float lo[3], const float hi[3], bool with_degenerate,
-                       TriBox boxes[8]);
+  /// box [g.lo, g.hi]; the kDegenerate ones (zero area) only `g.with_degenerate`. Writes every
+  /// triangle's box (j < m) to `boxes` (the gathering keeps it with the member instead of
+  /// computing it again) and to *on_seam the bit mask of the kept triangles whose box meets one
+  /// of g's seam slabs.
+  unsigned (*box_pass)(const LeafTri* blk, unsigned m, const GatherTest& g, BlockTriBoxes& boxes, unsigned* on_seam);
+  /// Appends the triangles of `keep` (a mask of lanes of `boxes`) to the columns at slot n, in
+  /// lane order: box, LeafTri index first + lane, `leaf` and `node`. Returns how many it
+  /// appended; the slots from n to n + 8 may all be written.
+  std::uint32_t (*append_members)(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first, std::uint32_t leaf,
+                                  std::uint32_t node, const MemberColumns& out, std::uint32_t n);
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box
   /// [lo, hi].
   unsigned (*block_pass)(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]);

@@ -79,6 +79,19 @@ unsigned box_mask_spelled_out(const LeafTri* blk, unsigned m, const float lo[3],
   return mask;
 }
 
+/// The triangles of blk[0, m) whose box meets one of the slabs [seam_lo[a], seam_hi[a]] on axis a.
+unsigned seam_mask_spelled_out(const LeafTri* blk, unsigned m, const float seam_lo[3], const float seam_hi[3]) {
+  unsigned mask = 0;
+  for (unsigned j = 0; j < m; ++j) {
+    const LeafTri& t = blk[j];
+    bool across = false;
+    for (int a = 0; a < 3; ++a)
+      across = across || (std::max({t.a[a], t.b[a], t.c[a]}) >= seam_lo[a] && std::min({t.a[a], t.b[a], t.c[a]}) <= seam_hi[a]);
+    if (across) mask |= 1u << j;
+  }
+  return mask;
+}
+
 unsigned block_mask_spelled_out(const BlockBox* boxes, unsigned m, const float lo[3], const float hi[3]) {
   unsigned mask = 0;
   for (unsigned j = 0; j < m; ++j) {
@@ -164,7 +177,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
     const Octree t = build(m);
     std::mt19937_64 rng(21);
     std::uniform_real_distribution<double> U(-1, 1);
-    std::size_t blocks = 0, partial = 0, nonzero = 0, edge_zero = 0, degenerate_met = 0, j0 = 0;
+    std::size_t blocks = 0, partial = 0, nonzero = 0, edge_zero = 0, degenerate_met = 0, seam_met = 0, j0 = 0;
     for (const Leaf& lf : t.leaves) {
       const double half = 0.5 * t.cell_size(t.leaf_level);
       for (std::uint32_t k = 0; k < lf.tri_count; k += kBlockTris) {
@@ -196,6 +209,15 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           const unsigned want_box[2] = {box_mask_spelled_out(flagged, n, lo, hi, false),
                                         box_mask_spelled_out(flagged, n, lo, hi, true)};
           degenerate_met += want_box[0] != want_box[1];
+          // a seam slab on one axis, through the box (GatherTest); none on the others
+          float seam_lo[3], seam_hi[3];
+          const int seam_axis = int(rng() % 3);
+          for (int a = 0; a < 3; ++a) {
+            seam_lo[a] = a == seam_axis ? lo[a] + 0.4f * (hi[a] - lo[a]) : std::numeric_limits<float>::infinity();
+            seam_hi[a] = a == seam_axis ? lo[a] + 0.6f * (hi[a] - lo[a]) : -std::numeric_limits<float>::infinity();
+          }
+          const unsigned want_seam = seam_mask_spelled_out(flagged, n, seam_lo, seam_hi);
+          seam_met += (want_box[1] & want_seam) != 0 && (want_box[1] & ~want_seam) != 0;
           nonzero += want != 0;
           const unsigned nb = std::min((lf.tri_count - k + kBlockTris - 1) / kBlockTris, 8u);
           const BlockBox* boxes = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()] + k / kBlockTris;
@@ -233,16 +255,52 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
             ASSERT_EQ(K.plane_pass(blk, n, p, lf.eps, s2, sides), want_sides) << name << " kernel " << int(kind);
             ASSERT_EQ(0, std::memcmp(s2, want_s2, n * sizeof(float))) << name << " kernel " << int(kind);
             for (const bool with_degenerate : {false, true}) {
-              TriBox tb[8];
-              const unsigned got = K.box_pass(flagged, n, lo, hi, with_degenerate, tb);
+              GatherTest gt;
+              for (int a = 0; a < 3; ++a) {
+                gt.lo[a] = lo[a];
+                gt.hi[a] = hi[a];
+                gt.seam_lo[a] = seam_lo[a];
+                gt.seam_hi[a] = seam_hi[a];
+              }
+              gt.with_degenerate = with_degenerate;
+              BlockTriBoxes tb;
+              unsigned on_seam = ~0u;
+              const unsigned got = K.box_pass(flagged, n, gt, tb, &on_seam);
               ASSERT_EQ(got, want_box[with_degenerate])
                   << name << " kernel " << int(kind) << " with_degenerate " << with_degenerate;
-              for (unsigned j = 0; j < n; ++j)  // each hit's box: the min and max of its vertices
-                for (int a = 0; a < 3 && (got >> j & 1u); ++a) {
+              ASSERT_EQ(on_seam, got & want_seam) << name << " kernel " << int(kind);
+              for (unsigned j = 0; j < n; ++j)  // each triangle's box: the min and max of its vertices
+                for (int a = 0; a < 3; ++a) {
                   const LeafTri& f = flagged[j];
-                  ASSERT_EQ(tb[j].lo[a], std::min({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
-                  ASSERT_EQ(tb[j].hi[a], std::max({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
+                  ASSERT_EQ(tb.lo[a][j], std::min({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
+                  ASSERT_EQ(tb.hi[a][j], std::max({f.a[a], f.b[a], f.c[a]})) << name << " kernel " << int(kind);
                 }
+              // the kept triangles appended at slot `at`, in lane order; the slots before it untouched
+              const std::uint32_t at = std::uint32_t(rng() % 9);
+              alignas(32) float clo[3][24], chi[3][24];
+              std::uint32_t ck[24], cleaf[24], cnode[24];
+              for (int a = 0; a < 3; ++a) {
+                std::fill(clo[a], clo[a] + 24, -1.0f);
+                std::fill(chi[a], chi[a] + 24, -1.0f);
+              }
+              std::fill(ck, ck + 24, 7u);
+              const MemberColumns cols{{clo[0], clo[1], clo[2]}, {chi[0], chi[1], chi[2]}, ck, cleaf, cnode};
+              const std::uint32_t first = lf.tri_begin + k;
+              ASSERT_EQ(K.append_members(tb, got, first, 11u, 13u, cols, at), std::uint32_t(__builtin_popcount(got)))
+                  << name << " kernel " << int(kind);
+              for (std::uint32_t i = 0; i < at; ++i) ASSERT_EQ(ck[i], 7u) << name << " kernel " << int(kind);
+              std::uint32_t slot = at;
+              for (unsigned j = 0; j < n; ++j) {
+                if (!(got >> j & 1u)) continue;
+                ASSERT_EQ(ck[slot], first + j) << name << " kernel " << int(kind);
+                ASSERT_EQ(cleaf[slot], 11u);
+                ASSERT_EQ(cnode[slot], 13u);
+                for (int a = 0; a < 3; ++a) {
+                  ASSERT_EQ(clo[a][slot], tb.lo[a][j]) << name << " kernel " << int(kind);
+                  ASSERT_EQ(chi[a][slot], tb.hi[a][j]) << name << " kernel " << int(kind);
+                }
+                ++slot;
+              }
             }
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
             K.box_distances(all, nall, Vec3d(pd[0], pd[1], pd[2]), d2.data());
@@ -259,6 +317,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
     EXPECT_GT(edge_zero, 100u) << name;  // segments through vertices: the exact fallback ran
     EXPECT_GT(nonzero, blocks) << name;
     EXPECT_GT(degenerate_met, 100u) << name;  // flagged triangles in the box: the two modes differ
+    EXPECT_GT(seam_met, 20u) << name;  // blocks with kept triangles on and off the seam
   }
   if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2 on this CPU: the baseline kernel alone was checked";
 }

@@ -115,7 +115,16 @@ TEST(EbpNearSet, GatherHoldsEveryTriangleMeetingItsBox) {
         for (std::uint32_t j = 0; j < ns.n; ++j) {
           EXPECT_TRUE(got.insert(t.tris[ns.k[j]].tri()).second) << name << ": a triangle twice";
           EXPECT_EQ(t.nodes[ns.node[j]].index, ns.leaf[j]);
+          const LeafTri& lt = t.tris[ns.k[j]];
+          EXPECT_TRUE(ns.k[j] >= t.leaves[ns.leaf[j]].tri_begin &&
+                      ns.k[j] < t.leaves[ns.leaf[j]].tri_begin + t.leaves[ns.leaf[j]].tri_count);
+          for (int a = 0; a < 3; ++a) {  // its box: the min and max of its float vertices
+            EXPECT_EQ(ns.blo[a][j], std::min({lt.a[a], lt.b[a], lt.c[a]})) << name << " member " << j;
+            EXPECT_EQ(ns.bhi[a][j], std::max({lt.a[a], lt.b[a], lt.c[a]})) << name << " member " << j;
+          }
         }
+        for (std::uint32_t j = ns.n; j % 8 != 0; ++j)  // padded to 8 with empty boxes
+          for (int a = 0; a < 3; ++a) EXPECT_GT(ns.blo[a][j], ns.bhi[a][j]) << name << " padding " << j;
         EXPECT_EQ(got, want) << name << " point " << i << " half-width " << h;
       }
       EXPECT_GT(gathered, 80) << name;
