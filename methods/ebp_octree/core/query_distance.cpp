@@ -196,6 +196,73 @@ class Query::DistanceSearch {
     return true;
   }
 
+  /// The leaf-cell search, in place of the descent from `start` (narrowed_start): when the cube
+  /// about p of half-width best + tol (its faces in double; tol covers their rounding) lies in
+  /// at most 2 leaf-grid cells per axis, every triangle within best of p is listed in the leaf
+  /// of one of them that meets the ball (the distribution lists a triangle in every leaf whose
+  /// closed cell it touches; empty nodes have none). Those leaves, nearest first, are then the
+  /// whole search: each located under `start` by its cell's bits, with no node bound. Returns
+  /// false (nothing done) otherwise, or when one of those cells is not under `start` (a page's
+  /// subtree that does not hold the ball).
+  bool leaf_cells_search(const StackItem& start) {
+    if (!(B.best < std::numeric_limits<double>::infinity())) return false;
+    const int L = t_.leaf_level;
+    const double cs = t_.cell_size(L);
+    const std::int64_t gmax = (std::int64_t(1) << L) - 1;
+    const double r = B.best + tol;
+    std::uint32_t r0[3], r1[3];
+    for (int a = 0; a < 3; ++a) {
+      const double lo = p[a] - r, hi = p[a] + r;
+      const double c0 = std::floor((lo - t_.root_lo[a]) / cs), c1 = std::floor((hi - t_.root_lo[a]) / cs);
+      if (!(c0 >= 0 && c1 <= double(gmax) && c1 - c0 <= 1)) return false;
+      r0[a] = std::uint32_t(c0);
+      r1[a] = std::uint32_t(c1);
+      if (!(t_.root_lo[a] + double(r0[a]) * cs <= lo && hi <= t_.root_lo[a] + double(r1[a] + 1) * cs)) return false;
+    }
+    // the cells that meet the ball, nearest first; each under `start`
+    std::uint32_t sx, sy, sz;
+    octcode_cell(nodes[start.node].code, &sx, &sy, &sz);
+    const int below = L - start.level;
+    struct Cell {
+      double d2;
+      std::uint32_t x, y, z;
+    } cells[8];
+    int nc = 0;
+    for (std::uint32_t z = r0[2]; z <= r1[2]; ++z)
+      for (std::uint32_t y = r0[1]; y <= r1[1]; ++y)
+        for (std::uint32_t x = r0[0]; x <= r1[0]; ++x) {
+          const Vec3d lo{t_.root_lo[0] + double(x) * cs, t_.root_lo[1] + double(y) * cs, t_.root_lo[2] + double(z) * cs};
+          const double d2 = cell_d2(lo, cs, p);
+          if (d2 > lim2) continue;
+          if ((x >> below) != sx || (y >> below) != sy || (z >> below) != sz) return false;
+          int i = nc++;
+          for (; i > 0 && cells[i - 1].d2 > d2; --i) cells[i] = cells[i - 1];
+          cells[i] = {d2, x, y, z};
+        }
+    for (int c = 0; c < nc; ++c) {
+      if (cells[c].d2 > lim2) break;  // the best has come down
+      scan_cell(start, cells[c].x, cells[c].y, cells[c].z);
+    }
+    return true;
+  }
+
+  /// The leaf of leaf-grid cell (x, y, z), found down from `start` (an ancestor) by the cell's
+  /// bits, scanned (once a query); nothing for an empty node (no triangle meets its cell).
+  void scan_cell(const StackItem& start, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    const int L = t_.leaf_level;
+    std::uint32_t ni = start.node;
+    for (int level = start.level; nodes[ni].kind == NodeKind::inner; ++level) {
+      const int shift = L - level - 1;
+      const std::uint32_t o = ((x >> shift) & 1u) | ((y >> shift) & 1u) << 1 | ((z >> shift) & 1u) << 2;
+      ni = t_.children[nodes[ni].index + o];
+      ++counters.nodes_visited;
+    }
+    const Node& nd = nodes[ni];
+    if (nd.kind != NodeKind::leaf || leaf_stamp_[nd.index] == qid) return;
+    scan_node = ni;
+    scan_leaf(nd.index, leaf_hint(nd));
+  }
+
   /// The radius a near set gathered now must hold: the ball (p, best + tol).
   double ball_radius() const { return B.best + tol; }
 
@@ -203,7 +270,9 @@ class Query::DistanceSearch {
   void descend() {
     StackItem stack[8 * (kMaxLevel + 2)];
     int sp = 0;
-    stack[sp++] = narrowed_start();
+    const StackItem start = narrowed_start();
+    if (leaf_cells_search(start)) return;
+    stack[sp++] = start;
     while (sp > 0) {
       const StackItem it = stack[--sp];
       if (it.bound > B.best) continue;

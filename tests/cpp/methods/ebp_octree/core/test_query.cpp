@@ -157,5 +157,5 @@ TEST(EbpQuery, CountersAreDeterministic) {
            std::to_string(c.exact_fallbacks);
   };
   EXPECT_EQ(str(in), "1419, 11843, 2144, 114, 0, 0, 0, 286, 0") << "inside counters";
-  EXPECT_EQ(str(di), "4494, 78291, 6397, 114, 0, 0, 0, 286, 0") << "distance counters";
+  EXPECT_EQ(str(di), "4754, 74705, 6401, 114, 0, 0, 0, 286, 0") << "distance counters";
 }
