@@ -135,18 +135,20 @@ unsigned box_pass_baseline(const LeafTri* blk, unsigned m, const GatherTest& g, 
 std::uint32_t append_members_baseline(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first,
                                       std::uint32_t leaf, std::uint32_t node, const MemberColumns& out,
                                       std::uint32_t n) {
-  const std::uint32_t n0 = n;
-  for (; keep; keep &= keep - 1, ++n) {
+  std::uint32_t count = 0;
+  for (; keep; keep &= keep - 1, ++count) {
     const unsigned j = unsigned(__builtin_ctz(keep));
+    const std::uint32_t s = n + count;
+    if (s >= out.slots) continue;  // past the columns' end: counted, not written
     for (int a = 0; a < 3; ++a) {
-      out.lo[a][n] = boxes.lo[a][j];
-      out.hi[a][n] = boxes.hi[a][j];
+      out.lo[a][s] = boxes.lo[a][j];
+      out.hi[a][s] = boxes.hi[a][j];
     }
-    out.k[n] = first + j;
-    out.leaf[n] = leaf;
-    out.node[n] = node;
+    out.k[s] = first + j;
+    out.leaf[s] = leaf;
+    out.node[s] = node;
   }
-  return n - n0;
+  return count;
 }
 
 unsigned distance_pass_baseline(const LeafTri* blk, unsigned m, const float p[3], const float q_lo[3],
@@ -364,6 +366,8 @@ constexpr std::array<std::uint32_t, 256> kLeftPack = left_pack_table();
 EBP_AVX2 std::uint32_t append_members_avx2(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first,
                                            std::uint32_t leaf, std::uint32_t node, const MemberColumns& out,
                                            std::uint32_t n) {
+  if (n + 8 > out.slots) [[unlikely]]  // the columns' end: lane by lane
+    return append_members_baseline(boxes, keep, first, leaf, node, out, n);
   const __m256i lanes = _mm256_and_si256(
       _mm256_srlv_epi32(_mm256_set1_epi32(int(kLeftPack[keep & 255u])), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
       _mm256_set1_epi32(15));

@@ -88,14 +88,14 @@ struct BlockTriBoxes {
 };
 
 /// The columns a gathering appends its members to (a near set's, near_set.hpp): each member's
-/// box, LeafTri index, leaf and node. Each column has room for 8 slots past the last member
-/// it may hold (append_members writes 8 slots whatever it appends).
+/// box, LeafTri index, leaf and node, `slots` long.
 struct MemberColumns {
   float* lo[3];
   float* hi[3];
   std::uint32_t* k;
   std::uint32_t* leaf;
   std::uint32_t* node;
+  std::uint32_t slots;
 };
 
 /// The kernels, as one table: fetch it once per query (leaf_kernel_table()) and call through it.
@@ -116,8 +116,9 @@ struct LeafKernelTable {
   /// of g's seam slabs.
   unsigned (*box_pass)(const LeafTri* blk, unsigned m, const GatherTest& g, BlockTriBoxes& boxes, unsigned* on_seam);
   /// Appends the triangles of `keep` (a mask of lanes of `boxes`) to the columns at slot n, in
-  /// lane order: box, LeafTri index first + lane, `leaf` and `node`. Returns how many it
-  /// appended; the slots from n to n + 8 may all be written.
+  /// lane order: box, LeafTri index first + lane, `leaf` and `node`. Returns how many `keep`
+  /// holds; those that would fall past the columns' `slots` are not written (the caller's set
+  /// has overflowed). Any slot from n to n + 8 within the columns may be written.
   std::uint32_t (*append_members)(const BlockTriBoxes& boxes, unsigned keep, std::uint32_t first, std::uint32_t leaf,
                                   std::uint32_t node, const MemberColumns& out, std::uint32_t n);
   /// Block pass over boxes[0, m), 1 <= m <= 8: the bit mask of the boxes that meet the closed box

@@ -108,7 +108,7 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
   const LeafTri* tris = t.tris.data();
   const LeafKernelTable& K = leaf_kernel_table();
-  const MemberColumns columns{{blo[0], blo[1], blo[2]}, {bhi[0], bhi[1], bhi[2]}, k, leaf, node};
+  const MemberColumns columns{{blo[0], blo[1], blo[2]}, {bhi[0], bhi[1], bhi[2]}, k, leaf, node, kNearMax};
   SeenTriangles seen(max_members);
   for (std::uint32_t z = r0[2]; z <= r1[2]; ++z)
     for (std::uint32_t y = r0[1]; y <= r1[1]; ++y)
@@ -135,7 +135,6 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
               if (!seen.insert(tris[first + j].tri())) keep &= ~(1u << j);
             }
             if (!keep) continue;
-            // (n <= max_members before the append: its 8 slots from n are within the columns)
             n += K.append_members(boxes, keep, first, nd.index, ni, columns, n);
             if (n > max_members) {
               overflowed = true;

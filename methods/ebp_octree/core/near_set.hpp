@@ -21,9 +21,6 @@ namespace ebp {
 inline constexpr std::uint32_t kNearMax = 256;
 /// The 64-bit words of a mask with one bit per member.
 inline constexpr std::uint32_t kNearMaskWords = kNearMax / 64;
-/// The slots of each column: kNearMax and the 8 that the gathering's appends may write past
-/// the last member (LeafKernelTable::append_members).
-inline constexpr std::uint32_t kNearSlots = kNearMax + 8;
 
 struct NearSet {
   bool valid = false;
@@ -33,11 +30,11 @@ struct NearSet {
   // (columns of kNearMax whatever the limit: each member's slots are at constant offsets from
   // the set; columns allocated to each set's own limit cost 2 % more instructions a search, the
   // gathering's nine column pointers spilled to the stack)
-  alignas(32) float blo[3][kNearSlots];
-  alignas(32) float bhi[3][kNearSlots];
-  std::uint32_t k[kNearSlots];     ///< LeafTri index
-  std::uint32_t leaf[kNearSlots];  ///< the leaf it was gathered from
-  std::uint32_t node[kNearSlots];  ///< and that leaf's node
+  alignas(32) float blo[3][kNearMax];
+  alignas(32) float bhi[3][kNearMax];
+  std::uint32_t k[kNearMax];     ///< LeafTri index
+  std::uint32_t leaf[kNearMax];  ///< the leaf it was gathered from
+  std::uint32_t node[kNearMax];  ///< and that leaf's node
 
   /// Whether the closed box [f0, f1] lies in the set's box.
   bool holds(const float f0[3], const float f1[3]) const {
