@@ -46,26 +46,6 @@ class SeenTriangles {
   std::uint32_t slots_[kSlots];
 };
 
-/// The leaf-grid cells [r0, r1] (per axis) whose union holds the closed box [lo, hi], checked
-/// exactly against the cell boundaries; false if that takes more than 2 cells on an axis.
-bool leaf_cells_holding(const Octree& t, const float lo[3], const float hi[3], std::uint32_t r0[3],
-                        std::uint32_t r1[3]) {
-  const double cs = t.cell_size(t.leaf_level), inv = 1.0 / cs;
-  const std::int64_t gmax = (std::int64_t(1) << t.leaf_level) - 1;
-  for (int a = 0; a < 3; ++a) {
-    auto cell = [&](double v) {
-      const double r = std::floor((v - t.root_lo[a]) * inv);
-      return std::uint32_t(r <= 0 ? 0 : r >= double(gmax) ? gmax : std::int64_t(r));
-    };
-    r0[a] = cell(lo[a]);
-    r1[a] = cell(hi[a]);
-    const bool fits = r1[a] - r0[a] <= 1 && t.root_lo[a] + double(r0[a]) * cs <= double(lo[a]) &&
-                      double(hi[a]) <= t.root_lo[a] + double(r1[a] + 1) * cs;
-    if (!fits) return false;
-  }
-  return true;
-}
-
 /// The seam slabs of a gathering over the cells [r0, r1] (GatherTest): on an axis where it spans
 /// two cells, the boundary between them widened by more than the distribution's margins, rounded
 /// outwards to float; empty on the other axes. The distribution lists a triangle in a leaf cell
@@ -103,7 +83,7 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
   }
   test.with_degenerate = with_degenerate;
   std::uint32_t r0[3], r1[3];
-  if (!leaf_cells_holding(t, lo, hi, r0, r1)) return false;
+  if (!t.leaf_cells_holding(Vec3d(lo[0], lo[1], lo[2]), Vec3d(hi[0], hi[1], hi[2]), r0, r1)) return false;
   seam_slabs(t, r0, r1, test);
   const bool several = r0[0] != r1[0] || r0[1] != r1[1] || r0[2] != r1[2];
   const LeafTri* tris = t.tris.data();

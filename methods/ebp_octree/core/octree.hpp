@@ -161,8 +161,13 @@ class Octree {
   double cell_size(int level) const { return root_size / double(std::uint64_t(1) << level); }
   /// The cell box of a code.
   void cell_box(Octcode c, Vec3d* lo, Vec3d* hi) const;
-  /// Index of the node whose cell holds leaf-grid cell (x, y, z) (a leaf or an empty node).
-  std::uint32_t locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
+  /// Index of the node whose cell holds leaf-grid cell (x, y, z) (a leaf or an empty node),
+  /// found down from node `from` (the root, or any ancestor of the cell) by the cell's bits.
+  std::uint32_t locate_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint32_t from = 0) const;
+  /// The leaf-grid cells [r0, r1] (per axis) whose union holds the closed box [lo, hi], checked
+  /// exactly against the cell boundaries; false if that takes more than 2 cells on an axis or the
+  /// box leaves the root cube.
+  bool leaf_cells_holding(const Vec3d& lo, const Vec3d& hi, std::uint32_t r0[3], std::uint32_t r1[3]) const;
 };
 
 // Cell geometry in double, as the searches walk it (the cell boundaries are exact doubles, "The

@@ -206,20 +206,12 @@ class Query::DistanceSearch {
   /// subtree that does not hold the ball).
   bool leaf_cells_search(const StackItem& start) {
     if (!(B.best < std::numeric_limits<double>::infinity())) return false;
-    const int L = t_.leaf_level;
-    const double cs = t_.cell_size(L);
-    const std::int64_t gmax = (std::int64_t(1) << L) - 1;
     const double r = B.best + tol;
     std::uint32_t r0[3], r1[3];
-    for (int a = 0; a < 3; ++a) {
-      const double lo = p[a] - r, hi = p[a] + r;
-      const double c0 = std::floor((lo - t_.root_lo[a]) / cs), c1 = std::floor((hi - t_.root_lo[a]) / cs);
-      if (!(c0 >= 0 && c1 <= double(gmax) && c1 - c0 <= 1)) return false;
-      r0[a] = std::uint32_t(c0);
-      r1[a] = std::uint32_t(c1);
-      if (!(t_.root_lo[a] + double(r0[a]) * cs <= lo && hi <= t_.root_lo[a] + double(r1[a] + 1) * cs)) return false;
-    }
+    if (!t_.leaf_cells_holding(p - Vec3d(r, r, r), p + Vec3d(r, r, r), r0, r1)) return false;
     // the cells that meet the ball, nearest first; each under `start`
+    const int L = t_.leaf_level;
+    const double cs = t_.cell_size(L);
     std::uint32_t sx, sy, sz;
     octcode_cell(nodes[start.node].code, &sx, &sy, &sz);
     const int below = L - start.level;
@@ -241,26 +233,15 @@ class Query::DistanceSearch {
         }
     for (int c = 0; c < nc; ++c) {
       if (cells[c].d2 > lim2) break;  // the best has come down
-      scan_cell(start, cells[c].x, cells[c].y, cells[c].z);
+      // the cell's node under the start; the walk down counts its nodes
+      const std::uint32_t ni = t_.locate_cell(cells[c].x, cells[c].y, cells[c].z, start.node);
+      const Node& nd = nodes[ni];
+      counters.nodes_visited += std::uint64_t(octcode_level(nd.code) - start.level);
+      if (nd.kind != NodeKind::leaf || leaf_stamp_[nd.index] == qid) continue;  // empty: no triangle meets it
+      scan_node = ni;
+      scan_leaf(nd.index, leaf_hint(nd));
     }
     return true;
-  }
-
-  /// The leaf of leaf-grid cell (x, y, z), found down from `start` (an ancestor) by the cell's
-  /// bits, scanned (once a query); nothing for an empty node (no triangle meets its cell).
-  void scan_cell(const StackItem& start, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    const int L = t_.leaf_level;
-    std::uint32_t ni = start.node;
-    for (int level = start.level; nodes[ni].kind == NodeKind::inner; ++level) {
-      const int shift = L - level - 1;
-      const std::uint32_t o = ((x >> shift) & 1u) | ((y >> shift) & 1u) << 1 | ((z >> shift) & 1u) << 2;
-      ni = t_.children[nodes[ni].index + o];
-      ++counters.nodes_visited;
-    }
-    const Node& nd = nodes[ni];
-    if (nd.kind != NodeKind::leaf || leaf_stamp_[nd.index] == qid) return;
-    scan_node = ni;
-    scan_leaf(nd.index, leaf_hint(nd));
   }
 
   /// The radius a near set gathered now must hold: the ball (p, best + tol).

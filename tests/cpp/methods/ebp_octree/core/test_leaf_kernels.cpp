@@ -306,9 +306,11 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
               const MemberColumns shortcols{{clo[0], clo[1], clo[2]}, {chi[0], chi[1], chi[2]}, ck, cleaf, cnode, at + 2};
               ASSERT_EQ(K.append_members(tb, got, first, 11u, 13u, shortcols, at), std::uint32_t(__builtin_popcount(got)))
                   << name << " kernel " << int(kind);
-              for (std::uint32_t i = 0; i < 24; ++i)
-                if (i < at || i >= at + std::min(2u, unsigned(__builtin_popcount(got))))
+              for (std::uint32_t i = 0; i < 24; ++i) {
+                if (i < at || i >= at + std::min(2u, unsigned(__builtin_popcount(got)))) {
                   ASSERT_EQ(ck[i], 7u) << name << " kernel " << int(kind) << " slot " << i;
+                }
+              }
             }
             ASSERT_EQ(K.block_pass(boxes, nb, lo, hi), want_blocks) << name << " kernel " << int(kind);
             K.box_distances(all, nall, Vec3d(pd[0], pd[1], pd[2]), d2.data());
