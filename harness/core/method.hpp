@@ -146,10 +146,11 @@ class Method : public QueryState {
   /// Bytes of the method's own structure, including its copy of the geometry.
   virtual std::size_t structure_bytes() const = 0;
 
-  /// The build options the structure itself carries, by option name, as text its declaration
-  /// reads: for a structure read from a file (a prebuilt store), the options it was built with.
-  /// A result records these in place of the spec's, so that it states what ran. Read after
-  /// build(). Default: none (the structure was built from the spec's options).
+  /// The options the structure itself decides, by option name, as text its declaration reads:
+  /// for a structure read from a file (a prebuilt store), the options it was built with, and any
+  /// query option it cannot honour, as it runs. A result records these in place of the spec's,
+  /// so that it states what ran. Read after build(). Default: none (the structure was built
+  /// from the spec's options).
   virtual std::map<std::string, std::string> build_options_read() const { return {}; }
 
   /// For a structure read from a file: the threads it was built with, as the file records them

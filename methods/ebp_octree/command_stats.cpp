@@ -66,8 +66,12 @@ void add_stats_command(CLI::App& ebp_cmd) {
                 j["tightness"]["leaves"].get<double>(), j["tightness"]["inner"].get<double>());
     std::printf("  colouring         %zu winding fallbacks, %zu degenerate edges, %zu leaves without reference\n",
                 s.colour_fallbacks, s.degenerate_edges, s.invalid_refs);
-    std::printf("  build             %.3f s (distribute %.3f, leaves %.3f, inner %.3f, colour %.3f), %d thread(s)\n",
-                s.build_seconds, s.seconds_distribute, s.seconds_leaves, s.seconds_inner, s.seconds_colour, o->threads);
+    std::printf("  face sides        %zu of %zu faces: front outside, back inside (the distance's sign from them)\n",
+                s.front_outside_faces, s.triangles);
+    std::printf("  build             %.3f s (distribute %.3f, leaves %.3f, inner %.3f, colour %.3f, derived %.3f of "
+                "which face sides %.3f), %d thread(s)\n",
+                s.build_seconds, s.seconds_distribute, s.seconds_leaves, s.seconds_inner, s.seconds_colour,
+                s.seconds_derived, s.seconds_face_sides, o->threads);
   });
 }
 

@@ -16,6 +16,7 @@ inline std::vector<Counter> ebp_counters(const ebp::QueryCounters& c) {
           {"hit_concave", c.hit_concave}, {"hit_special", c.hit_special},
           {"exact_fallbacks", c.exact_fallbacks}, {"certificate_renewals", c.certificate_renewals},
           {"certificate_served", c.certificate_served}, {"signs_chained", c.signs_chained},
+          {"signs_from_face", c.signs_from_face},
           {"near_served", c.near_served}, {"near_gathered", c.near_gathered},
           {"near_tested", c.near_tested}};
 }

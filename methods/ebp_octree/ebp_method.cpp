@@ -43,6 +43,10 @@ std::vector<ParamSpec> ebp_params() {
       {"chained_sign", ParamType::boolean, ParamRole::query, "true",
        "coherent distance on closed meshes: the previous query's sign when the step is shorter than the "
        "two queries' distances together (no inside test); same answers", {}},
+      {"face_sign", ParamType::boolean, ParamRole::query, "true",
+       "distance on closed meshes, in memory: the sign from the closest face where it decides it exactly (the "
+       "one nearest triangle, clean, front outside; no inside test); same answers. A store's pages do not carry "
+       "the face sides: a store job records false", {}},
   };
   specs.insert(specs.end(), query.begin(), query.end());
   const std::vector<ParamSpec> ooc = ooc_params();
@@ -115,6 +119,7 @@ nlohmann::json stats_json(const ebp::Octree& t) {
     part("node_boxes", t.node_box.capacity() * sizeof(ebp::BlockBox), t.node_box.size());
     part("sub_references", t.sub_refs.capacity() * sizeof(ebp::SubRef), t.sub_refs.size());
     part("sub_reference_sides", t.sub_sides.capacity(), t.sub_sides.size());
+    part("face_sides", t.front_outside.capacity() * sizeof(std::uint64_t), t.front_outside.size());
     j["bytes_breakdown"] = parts;
   }
   j["bytes"] = t.bytes() + t.derived_bytes();
@@ -131,7 +136,10 @@ nlohmann::json stats_json(const ebp::Octree& t) {
   j["build_breakdown_seconds"] = {{"distribute", s.seconds_distribute},
                                   {"leaves", s.seconds_leaves},
                                   {"inner", s.seconds_inner},
-                                  {"colour", s.seconds_colour}};
+                                  {"colour", s.seconds_colour},
+                                  {"derived", s.seconds_derived},
+                                  {"face_sides", s.seconds_face_sides}};
+  j["front_outside_faces"] = s.front_outside_faces;
   return j;
 }
 
@@ -140,11 +148,12 @@ namespace {
 /// One thread's queries: an ebp::Query (its stamps, path state and counters) over the shared tree.
 class EbpQueries final : public QueryState {
  public:
-  EbpQueries(const ebp::Octree& tree, bool coherent, bool certificate, bool adaptive, bool chained_sign)
+  EbpQueries(const ebp::Octree& tree, bool coherent, bool certificate, bool adaptive, bool chained_sign, bool face_sign)
       : tree_(tree), query_(tree, coherent) {
     query_.set_certificate(certificate);
     query_.set_adaptive_certificate(adaptive);
     query_.set_chained_sign(chained_sign);
+    query_.set_face_sign(face_sign);
   }
   // The query point into the tree's frame once, in double; the closest point back (octree.hpp).
   bool inside(const Vec3d& p) override { return query_.inside(tree_.to_frame(p)); }
@@ -188,7 +197,7 @@ class EbpOctreeMethod final : public SharedStructureMethod<EbpQueries> {
   std::unique_ptr<EbpQueries> make_state() const override {
     return std::make_unique<EbpQueries>(tree_, coherent_, params_.get_bool("certificate"),
                                         params_.get("certificate_policy") == "auto",
-                                        params_.get_bool("chained_sign"));
+                                        params_.get_bool("chained_sign"), params_.get_bool("face_sign"));
   }
   Params params_;
   bool coherent_;

@@ -86,9 +86,13 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
     start_queries();
   }
   /// The options the store was built with, from its header: what a result records as ran.
+  /// And face_sign=false: a store's pages do not carry the face sides (face_sides.hpp), so its
+  /// signs come from the inside query whatever the option says.
   std::map<std::string, std::string> build_options_read() const override {
     if (!store_) return {};
-    return build_option_texts(ebp::header_build_params(store_->header()));
+    std::map<std::string, std::string> read = build_option_texts(ebp::header_build_params(store_->header()));
+    read["face_sign"] = "false";
+    return read;
   }
   /// The threads `ebp build` ran on, from the store's info section (null in a store that does
   /// not say): a store job did not build on its own threads.
@@ -154,6 +158,10 @@ void check_ooc_options(const Params& p) {
         throw InputError("method ebp_octree: " + s.name + "=" + p.given().at(s.name) + " given beside store=" + p.get(kStore) +
                          ": a store was built with its own build options (its header; `bvhbench ebp info` shows "
                          "them), and a result records those");
+    if (p.given("face_sign") && p.get_bool("face_sign"))
+      throw InputError("method ebp_octree: face_sign=" + p.given().at("face_sign") + " given beside store=" + p.get(kStore) +
+                       ": a store's pages do not carry the face sides the sign from the closest face needs (an "
+                       "in-memory build has them)");
     return;
   }
   for (const ParamSpec& s : ooc_params())

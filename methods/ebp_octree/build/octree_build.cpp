@@ -33,6 +33,7 @@
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/face_sides.hpp"
 #include "methods/ebp_octree/core/sub_references.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
@@ -440,8 +441,13 @@ Octree build_octree(const std::vector<Vec3d>& vin, const Triangles& tin, const B
 
   count_nodes(T, ninner);
   if (vin.size() < (std::size_t(1) << 31)) T.closed = is_closed(tin);
+  t0 = Clock::now();
   compute_leaf_blocks(T);  // derived boxes (leaf_blocks.hpp)
   compute_sub_references(T);  // derived reference points (sub_references.hpp)
+  const auto t_sides = Clock::now();
+  compute_face_sides(T, threads);  // the faces the distance's sign can be taken from (face_sides.hpp)
+  S.seconds_face_sides = since(t_sides);
+  S.seconds_derived = since(t0);
   S.build_seconds = since(t_start);
   report(1.0);
   return T;

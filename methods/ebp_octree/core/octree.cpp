@@ -30,6 +30,13 @@ std::size_t Octree::bytes() const {
          tris.capacity() * sizeof(LeafTri);
 }
 
+Vec3d Octree::leaf_corner(const Leaf& lf) const {
+  const double cs = cell_size(leaf_level), inv = 1.0 / cs;
+  Vec3d lo;
+  for (int k = 0; k < 3; ++k) lo[k] = root_lo[k] + std::floor((double(lf.centre[k]) - root_lo[k]) * inv) * cs;
+  return lo;
+}
+
 void Octree::cell_box(Octcode c, Vec3d* lo, Vec3d* hi) const {
   std::uint32_t x, y, z;
   octcode_cell(c, &x, &y, &z);

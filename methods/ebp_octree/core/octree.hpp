@@ -152,10 +152,14 @@ class Octree {
   // --- derived (sub_references.cpp), on closed meshes only: empty otherwise ---
   std::vector<SubRef> sub_refs;           ///< per leaf, 8 in octant order
   std::vector<std::uint8_t> sub_sides;    ///< per block, 8 masks in octant order: bit j = LeafTri j of the block has sub-reference o on its outer side
+  // --- derived (face_sides.cpp), on closed meshes only: empty otherwise ---
+  std::vector<std::uint64_t> front_outside;  ///< bit per input triangle: its front is outside, its back inside
   std::size_t derived_bytes() const {
     return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox) +
-           sub_refs.capacity() * sizeof(SubRef) + sub_sides.capacity();
+           sub_refs.capacity() * sizeof(SubRef) + sub_sides.capacity() + front_outside.capacity() * 8;
   }
+  /// The exact corner of a leaf's cell (its float centre is within rounding of the cell's).
+  Vec3d leaf_corner(const Leaf& lf) const;
 
   std::size_t bytes() const;
   double cell_size(int level) const { return root_size / double(std::uint64_t(1) << level); }

@@ -24,6 +24,7 @@ struct QueryCounters {
   std::uint64_t certificate_renewals = 0;  ///< relaxed branch and bounds that renewed the certificate
   std::uint64_t certificate_served = 0;    ///< distance queries answered by a scan of the certificate
   std::uint64_t signs_chained = 0;         ///< signs taken from the previous query (no inside test)
+  std::uint64_t signs_from_face = 0;       ///< signs taken from the closest face (face_sides.hpp; no inside test)
   // the coherent distance's near start (near_set.hpp, DESIGN.md "Distance in contact")
   std::uint64_t near_served = 0;    ///< searches answered from the near set (no descent)
   std::uint64_t near_gathered = 0;  ///< near sets gathered or attempted (after a search the set did not hold)
@@ -50,6 +51,10 @@ struct DistanceBest {
   std::uint32_t k = UINT32_MAX;     ///< LeafTri index of the best, if the last call found it in its tree
   std::uint32_t leaf = UINT32_MAX;  ///< and the leaf it was found in
   std::uint32_t node = UINT32_MAX;  ///< and that leaf's node, if known
+  /// The least squared distance of the other triangles tested (+inf if none), the best's own
+  /// ties included. A search prunes only what is farther than best + tol (search_tol), so when
+  /// this exceeds (best + 2 tol)^2 the best is the one triangle nearest p, strictly.
+  double runner2 = std::numeric_limits<double>::infinity();
   /// A certificate's renewal (certificate.hpp): every triangle tested is offered to `collect`
   /// (found in page `collect_page`) instead of updating the best, and the prune radius is the
   /// collector's (best holds it); the caller takes the answer from the collector.
@@ -128,6 +133,9 @@ class Query {
   /// probe stays in the ball where no surface is (closed meshes). Answers do not change.
   void set_certificate(bool on) { certificate_ = on; }
   void set_chained_sign(bool on) { chained_sign_ = on; }
+  /// Take the distance's sign from the closest face where it decides it exactly (on by
+  /// default; face_sides.hpp): the searched distance only. Answers do not change.
+  void set_face_sign(bool on) { face_sign_ = on; }
   /// true (default): certificates only where they cost less per query than plain searches
   /// (CertifiedPath::prefer_plain); false: always a certificate on the coherent path.
   void set_adaptive_certificate(bool on);
@@ -223,6 +231,13 @@ class Query {
   // coherent distance: the certificate, the probe's steps and the previous sign
   bool certificate_ = true, chained_sign_ = true;
   std::unique_ptr<CertifiedPath> path_;
+  // the sign from the closest face: on; and the last unsigned distance's side of its closest
+  // face where that face decides the sign (+1 outside, -1 inside), else 0
+  bool face_sign_ = true;
+  int face_side_ = 0;
+  /// The sign of p's distance (inside?) after its unsigned distance: from the closest face, the
+  /// previous query's sign (chained) or the inside query.
+  bool sign_after_distance(const Vec3d& p, double distance);
 };
 
 }  // namespace ebp

@@ -19,9 +19,11 @@
 #include <utility>
 
 #include "methods/ebp_octree/core/certificate.hpp"
+#include "methods/ebp_octree/core/face_sides.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/near_set.hpp"
+#include "methods/ebp_octree/core/predicates.hpp"
 #include "methods/ebp_octree/core/query.hpp"
 #include "methods/ebp_octree/core/search_stack.hpp"
 
@@ -181,11 +183,11 @@ class Query::DistanceSearch {
     ExactTests exact;
     float g2[kNearMax];
     std::uint64_t mask[kNearMaskWords];
-    const std::uint32_t words = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(B.best2)), g2, mask);
+    const std::uint32_t words = ns.within(q_lo, q_hi, float_up(box_prefilter_limit(lim2)), g2, mask);
     for (std::uint32_t w = 0; w < words; ++w)
       for (std::uint64_t bits = mask[w]; bits; bits &= bits - 1) {
         const unsigned j = 64 * w + unsigned(__builtin_ctzll(bits));
-        if (double(g2[j]) > box_prefilter_limit(B.best2)) continue;  // the limit follows the best down
+        if (double(g2[j]) > box_prefilter_limit(lim2)) continue;  // the limit follows the best down
         const LeafTri& t = tris[ns.k[j]];
         if (t.tri() == seed) continue;
         add_exact(exact, t, ns.k[j], ns.leaf[j], ns.node[j]);
@@ -247,6 +249,11 @@ class Query::DistanceSearch {
   /// The radius a near set gathered now must hold: the ball (p, best + tol).
   double ball_radius() const { return B.best + tol; }
 
+  /// Whether a node's lower bound prunes it: everything in it is farther than best + tol, so
+  /// strictly farther than the best triangle's true distance (the sign from the closest face
+  /// relies on that: face_sides.hpp).
+  bool beyond(double bound) const { return bound > B.best + tol; }
+
   /// The descent: from the narrowed start, nodes popped nearest first, children ordered by bound.
   void descend() {
     StackItem stack[8 * (kMaxLevel + 2)];
@@ -256,7 +263,7 @@ class Query::DistanceSearch {
     stack[sp++] = start;
     while (sp > 0) {
       const StackItem it = stack[--sp];
-      if (it.bound > B.best) continue;
+      if (beyond(it.bound)) continue;
       const Node& nd = nodes[it.node];
       ++counters.nodes_visited;
       if (nd.kind == NodeKind::leaf) {
@@ -277,7 +284,7 @@ class Query::DistanceSearch {
         if (cn.kind == NodeKind::white || cn.kind == NodeKind::black) continue;
         const Vec3d lo = child_corner(Vec3d{it.lo.x, it.lo.y, it.lo.z}, csz, o);
         const double b = node_bound(ci, lo, csz);
-        if (b > B.best) continue;
+        if (beyond(b)) continue;
         kids[nk++] = {corner(lo), b, ci, cl};
       }
       push_nearest_first(kids, nk, stack, sp);
@@ -355,9 +362,13 @@ class Query::DistanceSearch {
       lim2 = (B.best + tol) * (B.best + tol);
       return;
     }
-    if (!(d2 <= B.best2)) return;  // (a NaN never wins, as before)
+    if (!(d2 <= B.best2)) {  // (a NaN never wins, and spoils the runner-up's margin)
+      if (!(d2 >= B.runner2)) B.runner2 = d2;
+      return;
+    }
     const std::uint64_t key = key_of ? key_of[t.tri()] : t.tri();
     if (d2 < B.best2 || key < B.key) {
+      B.runner2 = std::min(B.runner2, B.best2);  // the best so far (or the bound it started from)
       B.best2 = d2;
       B.best = std::sqrt(d2);
       B.key = key;
@@ -366,6 +377,8 @@ class Query::DistanceSearch {
       B.node = scan_node;
       B.closest = q;
       lim2 = (B.best + tol) * (B.best + tol);
+    } else {
+      B.runner2 = d2;  // a tie lost on the key
     }
   }
 
@@ -476,7 +489,7 @@ class Query::DistanceSearch {
   /// leaf's face-plane error bound eps_p, computed again only when either has moved.
   void update_limits(double eps_p) {
     if (B.best == limits_for_ && eps_p == limits_eps_) return;
-    distance_prefilter_limits(B.best, B.best2, eps_p, &plane_lim_, &box_lim_);
+    distance_prefilter_limits(B.best + tol, lim2, eps_p, &plane_lim_, &box_lim_);
     limits_for_ = B.best;
     limits_eps_ = eps_p;
   }
@@ -572,11 +585,11 @@ class Query::DistanceSearch {
   double node_bound(std::uint32_t ni, const Vec3d& lo, double size) {
     const double d2 = cell_d2(lo, size, p);
     double b = d2 > 0 ? std::sqrt(d2) : 0.0;
-    if (b > B.best) return b;  // pruned by the box alone: the planes could only raise the bound
+    if (beyond(b)) return b;  // pruned by the box alone: the planes could only raise the bound
     const double g2 = box_d2(nbox[ni], p);
     if (g2 > d2) {
       b = std::max(b, std::sqrt(g2) - tol);
-      if (b > B.best) return b;
+      if (beyond(b)) return b;
     }
     const Node& nd = nodes[ni];
     float m = -std::numeric_limits<float>::infinity();
@@ -589,7 +602,7 @@ class Query::DistanceSearch {
     counters.planes_tested += nd.plane_count;
     const double h = double(m) - slack;
     b = std::max(b, h);
-    if (b > B.best || h <= 0) return b;
+    if (beyond(b) || h <= 0) return b;
     // The most separating plane and the node box's bounding sphere (centre c, radius rho)
     // together: every point y of the geometry has n.(p - y) >= h and |y - c| <= rho, so its
     // component of p - y across n is >= |tangential part of (p - c)| - rho, and
@@ -707,6 +720,7 @@ class Query::DistanceSearch {
 
 DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   ++path_queries_;
+  face_side_ = 0;
   return coherent_ && certificate_ ? certified_distance(p) : searched_distance(p);
 }
 
@@ -733,6 +747,14 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
   r.closest = b.closest;
   r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
   r.triangle = std::int64_t(t.tri());
+  if (face_sign_ && front_outside(t_, t.tri())) {
+    // The sign from the closest face (face_sides.hpp): t is the one triangle nearest p when every
+    // other one tested is farther than best + 2 tol (nothing farther than best + tol was pruned,
+    // and tol bounds the rounding of a distance); then nothing crosses the segment from p to its
+    // closest point, which lies inside t, and p's side of t is its side of the solid.
+    const double m = b.best + 2 * search_tol(p, t_.root_lo, t_.root_size);
+    if (b.runner2 > m * m) face_side_ = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+  }
   if (coherent_) {
     last_tri_ = b.k;
     last_leaf_ = b.leaf;
@@ -891,24 +913,40 @@ bool Query::gather_distance_near(const Vec3d& p, double r, bool first) {
 
 DistanceAnswer Query::distance(const Vec3d& p) {
   DistanceAnswer r = unsigned_distance(p);
+  if (sign_after_distance(p, r.distance)) r.distance = -r.distance;
+  return r;
+}
+
+bool Query::sign_after_distance(const Vec3d& p, double distance) {
+  const bool track = coherent_ && t_.closed;
+  if (face_side_ != 0) {
+    ++counters.signs_from_face;
+    const bool in = face_side_ < 0;  // winding number 1 behind the face, 0 in front
+    if (track) {  // the coherent inside state moves to p, whose winding number is now known
+      prev_ok_ = true;
+      prev_p_ = p;
+      prev_w_ = in ? 1 : 0;
+    }
+    if (track && chained_sign_) path_->answered(p, distance, in);
+    return in;
+  }
   bool in;
-  if (coherent_ && chained_sign_ && t_.closed) {
+  if (track && chained_sign_) {
     // The chained sign (certificate.hpp): the previous point's, when the balls about it and p
     // that hold no surface cover the segment between them; the coherent inside state then moves
     // along (the winding number is the same at p), so that the next inside test steps from p.
     const Vec3d prev = path_->sign_point();
-    if (path_->sign_chained(p, r.distance, certificate_tol(p, t_.root_lo, t_.root_size), &in)) {
+    if (path_->sign_chained(p, distance, certificate_tol(p, t_.root_lo, t_.root_size), &in)) {
       ++counters.signs_chained;
       if (prev_ok_ && prev_p_ == prev) prev_p_ = p;
     } else {
       in = inside(p);
     }
-    path_->answered(p, r.distance, in);
+    path_->answered(p, distance, in);
   } else {
     in = inside(p);
   }
-  if (in) r.distance = -r.distance;
-  return r;
+  return in;
 }
 
 }  // namespace ebp

@@ -359,10 +359,7 @@ bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std:
   // stay in the cell, so the leaf's triangles are all that can cross them.
   ++counters.exact_fallbacks;
   const double cs = t_.cell_size(t_.leaf_level);
-  const double inv = 1.0 / cs;
-  Vec3d lo;
-  for (int k = 0; k < 3; ++k)
-    lo[k] = t_.root_lo[k] + std::floor((double(lf.centre[k]) - t_.root_lo[k]) * inv) * cs;
+  const Vec3d lo = t_.leaf_corner(lf);
   const Vec3d hi = lo + Vec3d(cs, cs, cs), cc = (lo + hi) * 0.5;
   int sides[64];
   for (const Vec3d& off : ref_offsets()) {

@@ -19,9 +19,13 @@ struct Stats {
   std::size_t colour_fallbacks = 0;   ///< components coloured by the winding number (see DESIGN.md)
   std::size_t degenerate_edges = 0;   ///< colouring edges skipped (segment through an edge/vertex)
   std::size_t invalid_refs = 0;       ///< leaves without a reference point off every plane
+  std::size_t front_outside_faces = 0;  ///< faces the distance's sign can be taken from (face_sides.hpp)
   std::vector<std::size_t> nodes_per_level;
   double build_seconds = 0;
   double seconds_distribute = 0, seconds_leaves = 0, seconds_inner = 0, seconds_colour = 0;
+  double seconds_derived = 0;     ///< blocks, sub-references and face sides
+  double seconds_face_sides = 0;  ///< of which the face sides
+
 };
 
 }  // namespace ebp

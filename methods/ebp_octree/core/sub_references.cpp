@@ -38,14 +38,6 @@ bool sides_of(const LeafTri* blk, std::uint32_t n, const Leaf& lf, const Vec3d& 
   return true;
 }
 
-/// The corner of the leaf's cell, exactly (the leaf's centre is a float near the cell's).
-Vec3d cell_corner(const Octree& t, const Leaf& lf) {
-  const double cs = t.cell_size(t.leaf_level), inv = 1.0 / cs;
-  Vec3d lo;
-  for (int k = 0; k < 3; ++k) lo[k] = t.root_lo[k] + std::floor((double(lf.centre[k]) - t.root_lo[k]) * inv) * cs;
-  return lo;
-}
-
 }  // namespace
 
 void compute_sub_references(Octree& t) {
@@ -66,7 +58,7 @@ void compute_sub_references(Octree& t) {
     const LeafTri* blk = t.tris.data() + lf.tri_begin;
     const std::uint32_t n = lf.tri_count;
     const Vec3d ref = to_d(lf.ref);
-    const Vec3d lo = cell_corner(t, lf);
+    const Vec3d lo = t.leaf_corner(lf);
     for (int o = 0; o < 8; ++o) {
       const Vec3d olo = child_corner(lo, half, o), ohi = olo + Vec3d(half, half, half);
       const Vec3d oc = olo + Vec3d(0.5, 0.5, 0.5) * half;

@@ -16,6 +16,7 @@ void add_counters(QueryCounters& a, const QueryCounters& b) {
   a.certificate_renewals += b.certificate_renewals;
   a.certificate_served += b.certificate_served;
   a.signs_chained += b.signs_chained;
+  a.signs_from_face += b.signs_from_face;
   a.near_served += b.near_served;
   a.near_gathered += b.near_gathered;
   a.near_tested += b.near_tested;

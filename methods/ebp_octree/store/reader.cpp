@@ -16,6 +16,7 @@
 
 #include "harness/util/errors.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/face_sides.hpp"
 #include "methods/ebp_octree/core/sub_references.hpp"
 #include "methods/ebp_octree/store/crc32c.hpp"
 #include "methods/ebp_octree/store/posix_io.hpp"
@@ -350,6 +351,7 @@ Octree StoreReader::load_all() const {
   copy_top(0);
   compute_leaf_blocks(T);  // derived boxes (not in the file)
   compute_sub_references(T);  // derived reference points (sub_references.hpp)
+  compute_face_sides(T);  // the faces the distance's sign can be taken from (face_sides.hpp)
   return T;
 }
 

@@ -117,6 +117,16 @@ TEST(Registry, EbpBuildOptionBesideAStoreIsRefused) {
   }
   EXPECT_THROW(r.resolve("ebp_octree:cache_mb=64"), InputError);  // a store's option without a store
   EXPECT_NO_THROW(r.resolve("ebp_octree:store=m.ebp,coherent=true,cache_mb=64"));
+  // the sign from the closest face needs the face sides, which a store's pages do not carry
+  try {
+    r.resolve("ebp_octree:store=m.ebp,face_sign=true");
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("face_sign=true"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("store=m.ebp"), std::string::npos) << msg;
+  }
+  EXPECT_NO_THROW(r.resolve("ebp_octree:store=m.ebp,face_sign=false"));
 }
 
 TEST(Registry, KnowsBruteForceAndRejectsUnknown) {

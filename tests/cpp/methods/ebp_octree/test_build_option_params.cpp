@@ -81,14 +81,16 @@ std::string write_store(const bvhbench::Mesh& m, const std::string& path, const 
 }
 
 // A store job records what the store says of its build: its options, and the threads it was
-// built on (null where an older store does not say), never the job's.
+// built on (null where an older store does not say), never the job's; and face_sign=false (its
+// pages do not carry the face sides, so its signs come from the inside query).
 TEST(EbpBuildOptions, AStoreJobRecordsTheStoresOwnBuild) {
   const bvhbench::test::TmpDir dir("ebp_build_options_test");
   const bvhbench::Mesh m = bvhbench::test::torus(40, 20);
   const bvhbench::Registry& reg = bvhbench::Registry::global();
   bvhbench::BuildContext ctx;
   ctx.threads = 2;
-  const std::map<std::string, std::string> options = {{"cluster_angle", "30"}, {"leaf_factor", "3"}, {"max_planes", "6"}};
+  const std::map<std::string, std::string> options = {
+      {"cluster_angle", "30"}, {"leaf_factor", "3"}, {"max_planes", "6"}, {"face_sign", "false"}};
 
   auto with_threads = reg.create("ebp_octree:store=" + write_store(m, dir.file("new.ebp"), R"({"threads":3})"));
   with_threads->build(m, ctx);

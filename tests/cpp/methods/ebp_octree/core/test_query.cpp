@@ -135,7 +135,8 @@ TEST(EbpQuery, TrianglesWithTwoEqualVerticesFirst) {
 }
 
 // Work counters are deterministic: exact values on a fixture (the cow, default parameters, 200
-// uniform + 200 near-surface points of seed 42; inside then distance, not coherent).
+// uniform + 200 near-surface points of seed 42; inside then distance, not coherent; the distance
+// again without the sign from the closest face, whose inside tests it spares).
 // To regenerate after an intended change: run this test, read the values it prints on failure,
 // and paste them below.
 TEST(EbpQuery, CountersAreDeterministic) {
@@ -149,6 +150,9 @@ TEST(EbpQuery, CountersAreDeterministic) {
   q.counters = {};
   for (const Vec3d& p : pts) q.distance(p);
   const QueryCounters di = q.counters;
+  Query q_inside_sign(t, false);
+  q_inside_sign.set_face_sign(false);
+  for (const Vec3d& p : pts) q_inside_sign.distance(p);
   auto str = [](const QueryCounters& c) {
     return std::to_string(c.nodes_visited) + ", " + std::to_string(c.planes_tested) + ", " +
            std::to_string(c.triangles_tested) + ", " + std::to_string(c.hit_white) + ", " +
@@ -157,5 +161,8 @@ TEST(EbpQuery, CountersAreDeterministic) {
            std::to_string(c.exact_fallbacks);
   };
   EXPECT_EQ(str(in), "1419, 11843, 2144, 114, 0, 0, 0, 286, 0") << "inside counters";
-  EXPECT_EQ(str(di), "4754, 74705, 6401, 114, 0, 0, 0, 286, 0") << "distance counters";
+  EXPECT_EQ(str(di), "3803, 64591, 4566, 100, 0, 0, 0, 61, 0") << "distance counters";
+  EXPECT_EQ(di.signs_from_face, 239u);
+  EXPECT_EQ(str(q_inside_sign.counters), "4754, 74705, 6401, 114, 0, 0, 0, 286, 0") << "distance counters, inside's sign";
+  EXPECT_EQ(q_inside_sign.counters.signs_from_face, 0u);
 }

@@ -1,0 +1,182 @@
+// The faces whose front is outside and back inside (core/face_sides.hpp), and the distance's
+// sign taken from them: on closed meshes every face it names has the brute-force winding number
+// 0 just in front and 1 just behind; faces that other triangles cross, faces inside another
+// part (winding 1 in front) and inverted shells are left out; an open mesh has none; and the
+// signs, distances and closest triangles are those of the inside query, bit for bit, on every
+// path, plain and coherent.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "harness/io/mesh_io.hpp"
+#include "methods/ebp_octree/core/face_sides.hpp"
+#include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/octree.hpp"
+#include "methods/ebp_octree/core/query.hpp"
+#include "methods/ebp_octree/ebp_test_support.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
+#include "support/test_support.hpp"
+
+using namespace ebp_test;
+
+namespace {
+
+std::size_t count_front_outside(const Octree& t) {
+  std::size_t n = 0;
+  for (std::uint32_t i = 0; i < t.num_triangles; ++i) n += front_outside(t, i) ? 1 : 0;
+  return n;
+}
+
+/// The unit cube moved by `off` and scaled by `s`, its vertices appended to m; `inward` flips it.
+void add_cube(Mesh& m, Vec3d off, double s, bool inward) {
+  const Mesh c = bvhbench::test::unit_cube();
+  const std::uint32_t base = std::uint32_t(m.vertices.size());
+  for (const Vec3d& v : c.vertices) m.vertices.push_back(off + v * s);
+  for (auto t : c.triangles) {
+    if (inward) std::swap(t[1], t[2]);
+    m.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+  }
+}
+
+/// A point a small step in front of (+1) or behind (-1) the centroid of triangle i.
+Vec3d beside_centroid(const Reference& ref, std::size_t i, double side, double step) {
+  const Vec3d a = ref.v[ref.f[i][0]], b = ref.v[ref.f[i][1]], c = ref.v[ref.f[i][2]];
+  const Vec3d n = bvhbench::triangle_normal(a, b, c);
+  return (a + b + c) * (1.0 / 3.0) + n * (side * step);
+}
+
+}  // namespace
+
+TEST(EbpFaceSides, EveryFaceNamedHasWindingZeroInFrontAndOneBehind) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (const char* name : {"cow.obj", "fandisk.obj", "rocker-arm.obj"})
+    meshes.push_back({name, bvhbench::load_mesh(shared_mesh(name))});
+  meshes.push_back({"torus", torus(64, 32)});
+  for (const auto& [name, m] : meshes) {
+    SCOPED_TRACE(name);
+    const Octree t = build(m);
+    ASSERT_TRUE(t.closed);
+    const Reference ref(m.vertices, m.triangles);
+    const double step = 1e-4 * t.cell_size(t.leaf_level);
+    const std::size_t named = count_front_outside(t);
+    EXPECT_EQ(named, t.stats.front_outside_faces);
+    // Almost every face of these clean, outward meshes (the cow's horns cross its head: those
+    // faces and the ones inside it are left out).
+    EXPECT_GT(named, m.triangles.size() * 9 / 10);
+    std::mt19937 rng(5);
+    for (std::size_t i = 0; i < m.triangles.size(); i += 1 + rng() % 7) {
+      if (!front_outside(t, std::uint32_t(i))) continue;
+      EXPECT_NEAR(ref.winding(beside_centroid(ref, i, +1, step)), 0.0, 1e-6) << "face " << i;
+      EXPECT_NEAR(ref.winding(beside_centroid(ref, i, -1, step)), 1.0, 1e-6) << "face " << i;
+    }
+  }
+}
+
+TEST(EbpFaceSides, CrossedInsideAndInvertedFacesAreLeftOut) {
+  {  // two cubes through each other: each crosses the other's faces; the parts inside the other
+     // cube have winding 1 in front
+    Mesh m;
+    add_cube(m, {0, 0, 0}, 1.0, false);
+    add_cube(m, {0.5, 0.25, 0.25}, 1.0, false);
+    const Octree t = build(m);
+    ASSERT_TRUE(t.closed);
+    const Reference ref(m.vertices, m.triangles);
+    for (std::uint32_t i = 0; i < m.triangles.size(); ++i) {
+      if (!front_outside(t, i)) continue;
+      // a named face is crossed by no other triangle: its front is outside everywhere
+      for (double u : {0.1, 0.3, 0.6}) {
+        const Vec3d a = ref.v[ref.f[i][0]], b = ref.v[ref.f[i][1]], c = ref.v[ref.f[i][2]];
+        const Vec3d x = a + (b - a) * u + (c - a) * (0.5 * (1 - u)) + bvhbench::triangle_normal(a, b, c) * 1e-6;
+        EXPECT_NEAR(ref.winding(x), 0.0, 1e-6) << "face " << i;
+      }
+    }
+    // The faces of the first cube at x = 1 (inside the second cube, or crossed by it) and those of
+    // the second at x = 0.5 are all out.
+    for (std::uint32_t i = 0; i < m.triangles.size(); ++i) {
+      const auto& f = m.triangles[i];
+      const double x0 = m.vertices[f[0]].x, x1 = m.vertices[f[1]].x, x2 = m.vertices[f[2]].x;
+      if ((i < 12 && x0 == 1 && x1 == 1 && x2 == 1) || (i >= 12 && x0 == 0.5 && x1 == 0.5 && x2 == 0.5)) {
+        EXPECT_FALSE(front_outside(t, i)) << "face " << i;
+      }
+    }
+    EXPECT_GT(count_front_outside(t), 0u);
+  }
+  {  // an inverted cube: its front is inside (winding -1 there, 0 behind): none
+    Mesh m;
+    add_cube(m, {0, 0, 0}, 1.0, true);
+    const Octree t = build(m);
+    ASSERT_TRUE(t.closed);
+    EXPECT_EQ(count_front_outside(t), 0u);
+  }
+  {  // a hollow cube (the cavity's faces point into it): every face's front is outside
+    Mesh m;
+    add_cube(m, {0, 0, 0}, 1.0, false);
+    add_cube(m, {0.25, 0.25, 0.25}, 0.5, true);
+    const Octree t = build(m);
+    ASSERT_TRUE(t.closed);
+    EXPECT_EQ(count_front_outside(t), m.triangles.size());
+  }
+  {  // the same triangle twice (closed: each edge is used both ways as often): left out
+    Mesh m;
+    add_cube(m, {0, 0, 0}, 1.0, false);
+    m.triangles.push_back(m.triangles[0]);
+    m.triangles.push_back({m.triangles[0][0], m.triangles[0][2], m.triangles[0][1]});
+    const Octree t = build(m);
+    ASSERT_TRUE(t.closed);
+    EXPECT_FALSE(front_outside(t, 0));
+    EXPECT_FALSE(front_outside(t, 12));
+  }
+}
+
+TEST(EbpFaceSides, OpenMeshHasNoneAndTheStoreRoundTripKeepsThem) {
+  const Octree open = build(bvhbench::test::open_cup());
+  EXPECT_FALSE(open.closed);
+  EXPECT_TRUE(open.front_outside.empty());
+  const Octree t = build(torus(48, 24));
+  bvhbench::test::TmpDir d("ebp_face_sides_test");
+  StoreWriteOptions wo;
+  wo.page_target = 4096;
+  wo.info_json = "{}";
+  const std::string path = (d.p / "torus.ebp").string();
+  write_store_atomic(t, path, wo);
+  const Octree back = StoreReader(path).load_all();
+  ASSERT_FALSE(t.front_outside.empty());
+  EXPECT_EQ(back.front_outside, t.front_outside);
+}
+
+TEST(EbpFaceSides, TheSignFromTheFaceIsTheInsideQuerys) {
+  std::vector<std::pair<std::string, Mesh>> meshes;
+  for (const char* name : {"cow.obj", "fandisk.obj"}) meshes.push_back({name, bvhbench::load_mesh(shared_mesh(name))});
+  meshes.push_back({"torus", torus(64, 32)});
+  Mesh two;
+  add_cube(two, {0, 0, 0}, 1.0, false);
+  add_cube(two, {0.5, 0.25, 0.25}, 1.0, false);
+  meshes.push_back({"two cubes", two});
+  for (const auto& [name, m] : meshes) {
+    SCOPED_TRACE(name);
+    const Octree t = build(m);
+    const Reference ref(m.vertices, m.triangles);
+    // points near the surface (where the face decides) and far from it, in path order
+    const std::vector<Vec3d> pts = sample_points(ref, 300, 1500, 11);
+    for (const bool coherent : {false, true}) {
+      SCOPED_TRACE(coherent ? "coherent" : "plain");
+      Query with(t, coherent), without(t, coherent);
+      with.set_certificate(false);
+      without.set_certificate(false);
+      without.set_face_sign(false);
+      for (const Vec3d& p0 : pts) {
+        const Vec3d p = t.to_frame(p0);
+        const DistanceAnswer a = with.distance(p), b = without.distance(p);
+        ASSERT_EQ(a.distance, b.distance) << p0.x << " " << p0.y << " " << p0.z;
+        ASSERT_EQ(a.triangle, b.triangle);
+        ASSERT_EQ(a.distance < 0, ref.winding(p0) > 0.5) << p0.x << " " << p0.y << " " << p0.z;
+      }
+      EXPECT_GT(with.counters.signs_from_face, pts.size() / 4);
+      EXPECT_EQ(without.counters.signs_from_face, 0u);
+    }
+  }
+}
