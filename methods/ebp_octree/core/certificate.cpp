@@ -213,6 +213,7 @@ void DistanceCertificate::exact(std::uint32_t i, const Vec3d& q, CertifiedHit* h
 CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
   CertifiedHit h;
   exact(current_, q, &h, c);
+  h.runner2 = kInf;
   std::uint32_t win = current_;
   const std::uint32_t n = std::uint32_t(members_.size());
   if (n > 1) {
@@ -229,8 +230,11 @@ CertifiedHit DistanceCertificate::serve(const Vec3d& q, QueryCounters& c) {
         CertifiedHit x;
         exact(i, q, &x, c);
         if (better(x.d2, x.key, h.d2, h.key)) {
+          x.runner2 = std::min(h.runner2, h.d2);
           h = x;
           win = i;
+        } else {
+          h.runner2 = std::min(h.runner2, x.d2);
         }
       }
   }

@@ -108,6 +108,11 @@ struct CertifiedHit {
   Vec3d closest, normal;
   std::uint64_t key = UINT64_MAX;
   TriangleSite site;
+  /// A served answer: the least squared distance of the other members tested (+inf if none).
+  /// The scan prunes only members farther than the best + tol, and every other triangle is
+  /// farther than that while q is covered, so past (best + 2 tol)^2 the winner is the one
+  /// triangle nearest q, strictly (the sign from the closest face). 0: not known (a renewal's).
+  double runner2 = 0;
 };
 
 class DistanceCertificate {
@@ -137,8 +142,11 @@ class DistanceCertificate {
   bool valid() const { return valid_; }
   /// |q - centre| <= r: q's closest triangle is in S.
   bool covers(const Vec3d& q) const;
-  /// The lexicographic minimum of (squared distance, key) over S at q (q covered).
+  /// The lexicographic minimum of (squared distance, key) over S at q (q covered), with its
+  /// runner-up (CertifiedHit::runner2).
   CertifiedHit serve(const Vec3d& q, QueryCounters& c);
+  /// The rounding bound the certificate was made with (certificate_tol at its centre).
+  double tol() const { return tol_; }
   void clear() { valid_ = false; }
   std::uint32_t size() const { return std::uint32_t(members_.size()); }
   /// How many triangles the last renewal offered (the collection's work: each is copied, and the
@@ -297,11 +305,12 @@ class CertifiedPath {
 /// cost as much as thousands of plain searches. `work_now()` gives the Work counted so far by
 /// every search and scan of this query state (the choice between certificates and plain searches
 /// weighs it). On a certified answer *site is where its triangle was found (the next renewal's
-/// seed). The tree's root cube: root_lo, root_size.
+/// seed) and *runner2, if given, the scan's runner-up (CertifiedHit::runner2; left as it was on
+/// an answer of `plain()`). The tree's root cube: root_lo, root_size.
 template <class WorkNow, class Renew, class Plain>
 DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double leaf_cell, const Vec3d& root_lo,
                                double root_size, QueryCounters& c, TriangleSite* site, WorkNow&& work_now,
-                               Renew&& renew, Plain&& plain) {
+                               Renew&& renew, Plain&& plain, double* runner2 = nullptr) {
   if (path.quiet_plain(p)) return plain();
   path.step_to(p);
   const Work w0 = work_now();
@@ -346,6 +355,7 @@ DistanceAnswer certified_query(CertifiedPath& path, const Vec3d& p, double leaf_
     return plain();
   }
   *site = h.site;
+  if (runner2) *runner2 = h.runner2;
   DistanceAnswer r;
   r.distance = std::sqrt(h.d2);
   r.closest = h.closest;

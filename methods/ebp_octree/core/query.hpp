@@ -235,6 +235,7 @@ class Query {
   // face where that face decides the sign (+1 outside, -1 inside), else 0
   bool face_sign_ = true;
   int face_side_ = 0;
+  void take_face_side(const Vec3d& p, std::uint32_t k, double d, double runner2, double tol);
   /// The sign of p's distance (inside?) after its unsigned distance: from the closest face, the
   /// previous query's sign (chained) or the inside query.
   bool sign_after_distance(const Vec3d& p, double distance);

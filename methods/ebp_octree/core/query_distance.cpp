@@ -718,6 +718,18 @@ class Query::DistanceSearch {
   std::uint32_t scan_node = UINT32_MAX;  ///< the node of the leaf being scanned, if known
 };
 
+// The sign from the closest face (face_sides.hpp): LeafTri k, at distance d from p, is the one
+// triangle nearest p when every other one tested is farther than d + 2 tol (runner2, squared;
+// nothing farther than d + tol went untested, and tol bounds the rounding of a distance); then
+// nothing crosses the segment from p to its closest point, which lies inside the face, and p's
+// side of the face is its side of the solid where the face's front is outside.
+void Query::take_face_side(const Vec3d& p, std::uint32_t k, double d, double runner2, double tol) {
+  if (!face_sign_ || k >= t_.tris.size()) return;
+  const LeafTri& t = t_.tris[k];
+  const double m = d + 2 * tol;
+  if (runner2 > m * m && front_outside(t_, t.tri())) face_side_ = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
+}
+
 DistanceAnswer Query::unsigned_distance(const Vec3d& p) {
   ++path_queries_;
   face_side_ = 0;
@@ -747,14 +759,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
   r.closest = b.closest;
   r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
   r.triangle = std::int64_t(t.tri());
-  if (face_sign_ && front_outside(t_, t.tri())) {
-    // The sign from the closest face (face_sides.hpp): t is the one triangle nearest p when every
-    // other one tested is farther than best + 2 tol (nothing farther than best + tol was pruned,
-    // and tol bounds the rounding of a distance); then nothing crosses the segment from p to its
-    // closest point, which lies inside t, and p's side of t is its side of the solid.
-    const double m = b.best + 2 * search_tol(p, t_.root_lo, t_.root_size);
-    if (b.runner2 > m * m) face_side_ = orient3d(to_d(t.a), to_d(t.b), to_d(t.c), p);
-  }
+  take_face_side(p, b.k, b.best, b.runner2, search_tol(p, t_.root_lo, t_.root_size));
   if (coherent_) {
     last_tri_ = b.k;
     last_leaf_ = b.leaf;
@@ -770,6 +775,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
 // The first query of a path has no step yet: a plain search.
 DistanceAnswer Query::certified_distance(const Vec3d& p) {
   TriangleSite site;
+  double runner2 = 0;  // the certificate's runner-up, on an answer it served
   const DistanceAnswer r = certified_query(
       *path_, p, t_.cell_size(t_.leaf_level), t_.root_lo, t_.root_size, counters, &site, [&] { return work_of(counters); },
       [&](DistanceCertificate& cert, const Vec3d& centre) {
@@ -783,7 +789,8 @@ DistanceAnswer Query::certified_distance(const Vec3d& p) {
         }
         distance_bound(centre, b, s);
       },
-      [&] { return searched_distance(p); });
+      [&] { return searched_distance(p); }, &runner2);
+  if (runner2 > 0 && site.k != UINT32_MAX) take_face_side(p, site.k, r.distance, runner2, path_->cert.tol());
   if (site.k != UINT32_MAX) {
     last_tri_ = site.k;
     last_leaf_ = site.leaf;

@@ -59,16 +59,20 @@ Brute brute(const Reference& ref, const Vec3d& p) {
   return b;
 }
 
-/// Along `path`: the coherent query with certificate and chained sign (`cert`, the default)
-/// against the same without both (`plain`), answer by answer; optionally against brute force.
-/// Returns the certified query's counters.
+/// Along `path`: the coherent query with certificate and chained sign (`cert`, the default; the
+/// sign from the closest face only if `face_sign`, so that the chained sign is what gives the
+/// signs it does not) against the same without any (`plain`), answer by answer; optionally
+/// against brute force. Returns the certified query's counters.
 QueryCounters expect_certified_path(const Octree& t, const std::vector<Vec3d>& path, const std::string& what,
-                                    const Reference* ref = nullptr, ScanKernel kernel = best_scan_kernel()) {
+                                    const Reference* ref = nullptr, ScanKernel kernel = best_scan_kernel(),
+                                    bool face_sign = false) {
   Query cert(t, true), plain(t, true);
   cert.set_scan_kernel(kernel);
   cert.set_adaptive_certificate(false);  // the certificate at every renewal: it is what is tested
+  cert.set_face_sign(face_sign);
   plain.set_certificate(false);
   plain.set_chained_sign(false);
+  plain.set_face_sign(false);
   for (std::size_t i = 0; i < path.size(); ++i) {
     const DistanceAnswer a = cert.distance(path[i]), b = plain.distance(path[i]);
     const std::string d = differs(a, b);
@@ -103,7 +107,8 @@ std::vector<Vec3d> through(const std::vector<Vec3d>& way, int per) {
 }  // namespace
 
 // The harness's haptic paths on the shared meshes: bit-identical answers, and the certificate
-// and chained sign actually serve most queries.
+// and chained sign actually serve most queries; with the sign from the closest face, that gives
+// most signs, from the certificate's answers too.
 TEST(EbpCertificate, HapticPathsOnRealMeshesAreBitIdentical) {
   for (const char* name : {"cow.obj", "fandisk.obj", "rocker-arm.obj", "stanford-bunny.obj"}) {
     const Mesh m = bvhbench::load_mesh(shared_mesh(name));
@@ -114,6 +119,10 @@ TEST(EbpCertificate, HapticPathsOnRealMeshesAreBitIdentical) {
     EXPECT_GT(c.certificate_served, path.size() / 2) << name;
     if (t.closed) {
       EXPECT_GT(c.signs_chained, path.size() / 2) << name;
+    }
+    const QueryCounters f = expect_certified_path(t, path, name, nullptr, best_scan_kernel(), true);
+    if (t.closed) {
+      EXPECT_GT(f.signs_from_face, path.size() / 2) << name;
     }
   }
 }
@@ -146,8 +155,11 @@ TEST(EbpCertificate, ContactPathsAreBitIdentical) {
       nlohmann::json meta;
       const auto path = bvhbench::generate_queries(m, "contact", 3000, 1, {{"band_mm", 0.2}, {"slide_speed", speed}}, &meta);
       const QueryCounters c = expect_certified_path(t, path, std::string(name) + " contact");
+      const QueryCounters f =
+          expect_certified_path(t, path, std::string(name) + " contact, face sign", nullptr, best_scan_kernel(), true);
       if (t.closed) {
         EXPECT_GT(c.signs_chained, path.size() / 4) << name << " " << speed;
+        EXPECT_GT(f.signs_from_face, path.size() / 2) << name << " " << speed;
       }
     }
   }

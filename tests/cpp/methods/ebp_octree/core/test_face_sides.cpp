@@ -3,7 +3,7 @@
 // 0 just in front and 1 just behind; faces that other triangles cross, faces inside another
 // part (winding 1 in front) and inverted shells are left out; an open mesh has none; and the
 // signs, distances and closest triangles are those of the inside query, bit for bit, on every
-// path, plain and coherent.
+// path, plain, coherent, and answered from certificates.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -162,11 +162,15 @@ TEST(EbpFaceSides, TheSignFromTheFaceIsTheInsideQuerys) {
     const Reference ref(m.vertices, m.triangles);
     // points near the surface (where the face decides) and far from it, in path order
     const std::vector<Vec3d> pts = sample_points(ref, 300, 1500, 11);
-    for (const bool coherent : {false, true}) {
-      SCOPED_TRACE(coherent ? "coherent" : "plain");
+    // plain; coherent; coherent with certificates as the policy chooses them; always
+    for (const int variant : {0, 1, 2, 3}) {
+      SCOPED_TRACE("variant " + std::to_string(variant));
+      const bool coherent = variant > 0;
       Query with(t, coherent), without(t, coherent);
-      with.set_certificate(false);
-      without.set_certificate(false);
+      for (Query* q : {&with, &without}) {
+        q->set_certificate(variant >= 2);
+        q->set_adaptive_certificate(variant == 2);
+      }
       without.set_face_sign(false);
       for (const Vec3d& p0 : pts) {
         const Vec3d p = t.to_frame(p0);
