@@ -134,7 +134,8 @@ class Query {
   void set_certificate(bool on) { certificate_ = on; }
   void set_chained_sign(bool on) { chained_sign_ = on; }
   /// Take the distance's sign from the closest face where it decides it exactly (on by
-  /// default; face_sides.hpp): the searched distance only. Answers do not change.
+  /// default; face_sides.hpp), on searched answers and on those a certificate serves. Answers
+  /// do not change.
   void set_face_sign(bool on) { face_sign_ = on; }
   /// true (default): certificates only where they cost less per query than plain searches
   /// (CertifiedPath::prefer_plain); false: always a certificate on the coherent path.
