@@ -49,7 +49,9 @@ def test_a_store_job_records_the_stores_build_options(store):
         assert r["status"] == "ok", r["message"]
         params = r["job"]["params"]
         assert params["leaf_factor"] == "3" and params["max_planes"] == "6" and params["cluster_angle"] == "30"
-        assert sorted(r["job"]["params_read_from_structure"]) == ["cluster_angle", "leaf_factor", "max_planes"]
+        # and the sign from the closest face, which a store's pages cannot give, as not used
+        assert params["face_sign"] is False
+        assert sorted(r["job"]["params_read_from_structure"]) == ["cluster_angle", "face_sign", "leaf_factor", "max_planes"]
         assert r["job"]["params_key"] == f"store={store / 'cow.ebp'}"  # the key names the store
     # The same options built in memory: the same tree, so the same answers' work.
     _, mem = job(store, "ebp_octree:leaf_factor=3.0,max_planes=6")
