@@ -50,7 +50,7 @@ def test_a_store_job_records_the_stores_build_options(store):
         params = r["job"]["params"]
         assert params["leaf_factor"] == "3" and params["max_planes"] == "6" and params["cluster_angle"] == "30"
         # and the sign from the closest face, which a store's pages cannot give, as not used
-        assert params["face_sign"] is False
+        assert params["face_sign"] == "false"
         assert sorted(r["job"]["params_read_from_structure"]) == ["cluster_angle", "face_sign", "leaf_factor", "max_planes"]
         assert r["job"]["params_key"] == f"store={store / 'cow.ebp'}"  # the key names the store
     # The same options built in memory: the same tree, so the same answers' work.
