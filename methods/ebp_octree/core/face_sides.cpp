@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "methods/ebp_octree/core/float_coords.hpp"
+#include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/leaf_kernels.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
@@ -52,17 +53,13 @@ struct TriBox {
 };
 
 /// Whether the closed segment [s0, s1] may meet the closed triangle (a, b, c), exactly; true
-/// also where the segment lies in the triangle's plane (not decided here).
+/// also where the segment lies in the triangle's plane (not decided here). Otherwise the
+/// parity test's crossing (segment_triangle), from the endpoint off the plane.
 bool segment_meets(const Vec3d& s0, const Vec3d& s1, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const int o0 = orient3d(a, b, c, s0), o1 = orient3d(a, b, c, s1);
   if (o0 == o1) return o0 == 0;  // both strictly on one side, or both in the plane
-  if (o0 == -o1 || o0 == 0 || o1 == 0) {
-    // the line meets the plane at one point of the segment: inside the closed triangle iff the
-    // line passes on no edge's outer side
-    const int e1 = orient3d(s0, s1, a, b), e2 = orient3d(s0, s1, b, c), e3 = orient3d(s0, s1, c, a);
-    return !((e1 > 0 || e2 > 0 || e3 > 0) && (e1 < 0 || e2 < 0 || e3 < 0));
-  }
-  return true;
+  const Cross x = o1 != 0 ? segment_triangle(s0, s1, o0, o1, a, b, c) : segment_triangle(s1, s0, o1, o0, a, b, c);
+  return x != Cross::none;
 }
 
 /// Whether a, b, c are exactly in one plane with p (the plane of a triangle and a point).
@@ -203,8 +200,7 @@ struct LeafView {
     int wr = lf.ref_winding;
     const std::uint8_t* sides = nullptr;  // the octant's sides of the leaf's triangles, by block
     if (!t.sub_refs.empty()) {
-      const int o = (x.x >= double(lf.centre[0]) ? 1 : 0) | (x.y >= double(lf.centre[1]) ? 2 : 0) |
-                    (x.z >= double(lf.centre[2]) ? 4 : 0);
+      const int o = leaf_octant(lf, x);
       const SubRef& sr = t.sub_refs[li * 8 + std::size_t(o)];
       if (sr.valid) {
         r = to_d(sr.p);
@@ -215,11 +211,10 @@ struct LeafView {
     const Vec3d r3 = r * scale;
     const float pl[3] = {float(x.x - double(lf.centre[0])), float(x.y - double(lf.centre[1])),
                          float(x.z - double(lf.centre[2]))};
-    float s0[3], s1[3];
+    float s0[3], s1[3];  // the segment's box, rounded outwards to float (far beyond x's rounding)
     for (int a = 0; a < 3; ++a) {
-      const double m = 0x1p-40 * (std::fabs(x[a]) + size);  // covers x's rounding
-      s0[a] = std::nextafter(float(std::min(x[a], r[a]) - m), -INFINITY);
-      s1[a] = std::nextafter(float(std::max(x[a], r[a]) + m), INFINITY);
+      s0[a] = float_down_near(std::min(x[a], r[a]));
+      s1[a] = float_up_near(std::max(x[a], r[a]));
     }
     auto misses = [&](const float* blo, const float* bhi) {
       return bhi[0] < s0[0] || blo[0] > s1[0] || bhi[1] < s0[1] || blo[1] > s1[1] || bhi[2] < s0[2] || blo[2] > s1[2];

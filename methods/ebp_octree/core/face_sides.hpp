@@ -9,9 +9,9 @@
 ///   - it is clean: no other triangle meets its open interior (two triangles of a leaf meet only
 ///     in the vertices and the edge they share, or not at all: exact tests), so the winding
 ///     number just in front of it is one value over the whole face; and
-///   - that value is 0: counted exactly along the segment from its centroid's leaf's reference
-///     point to the centroid (the segment lies in the leaf's cell, so the leaf's triangles are
-///     all that can cross it).
+///   - that value is 0: counted exactly along the segment to the centroid from the reference
+///     point of the centroid's octant of its leaf (the segment lies in the leaf's cell, so the
+///     leaf's triangles are all that can cross it).
 /// Anything these exact tests cannot decide leaves the face out; the query then asks the inside
 /// query, as it does for every face on an open mesh.
 #include "methods/ebp_octree/core/octree.hpp"

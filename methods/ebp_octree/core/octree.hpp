@@ -186,6 +186,12 @@ inline int child_octant(const Vec3d& p, const Vec3d& lo, double half) {
 inline Vec3d child_corner(const Vec3d& lo, double half, int o) {
   return {lo.x + ((o & 1) ? half : 0.0), lo.y + ((o & 2) ? half : 0.0), lo.z + ((o & 4) ? half : 0.0)};
 }
+/// The octant of a leaf's cell that holds p (x | y << 1 | z << 2, by the leaf's float centre:
+/// the sub-references' order).
+inline int leaf_octant(const Leaf& lf, const Vec3d& p) {
+  return (p.x >= double(lf.centre[0]) ? 1 : 0) | (p.y >= double(lf.centre[1]) ? 2 : 0) |
+         (p.z >= double(lf.centre[2]) ? 4 : 0);
+}
 /// Whether the closed cube [lo, lo + size] holds p.
 inline bool cell_contains(const Vec3d& lo, double size, const Vec3d& p) {
   return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= lo.x + size && p.y <= lo.y + size && p.z <= lo.z + size;

@@ -346,8 +346,7 @@ bool Query::classify_leaf(const Vec3d& p, const Leaf& lf, std::uint32_t li, std:
     };
     if (!t_.sub_refs.empty()) {
       // From the sub-reference of p's octant of the cell, when it has one: a shorter segment.
-      const int o = (p.x >= double(lf.centre[0]) ? 1 : 0) | (p.y >= double(lf.centre[1]) ? 2 : 0) |
-                    (p.z >= double(lf.centre[2]) ? 4 : 0);
+      const int o = leaf_octant(lf, p);
       const SubRef& sr = t_.sub_refs[std::size_t(li) * 8 + std::size_t(o)];
       if (sr.valid && from(to_d(sr.p), &t_.sub_sides[std::size_t(t_.leaf_block[li]) * 8 + std::size_t(o)], sr.winding))
         return in;
