@@ -103,29 +103,25 @@ TEST(Registry, RealOptionsShareOneKey) {
   EXPECT_EQ(r.resolve("ebp_octree:leaf_factor=5").params_key(), "");
 }
 
-// A store carries its build options: one given beside it is refused, naming both.
+// A store carries its build options: one given beside it is refused, naming both; and so is
+// the sign from the closest face, which needs the face sides a store's pages do not carry.
 TEST(Registry, EbpBuildOptionBesideAStoreIsRefused) {
   const Registry& r = Registry::global();
   if (!r.find("ebp_octree")) GTEST_SKIP() << "ebp_octree not in this build";
-  try {
-    r.resolve("ebp_octree:store=m.ebp,leaf_factor=8");
-    FAIL() << "accepted";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("leaf_factor=8"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("store=m.ebp"), std::string::npos) << msg;
-  }
+  auto expect_refused_naming = [&](const std::string& spec, const std::string& option) {
+    try {
+      r.resolve(spec);
+      ADD_FAILURE() << spec << ": accepted";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(option), std::string::npos) << msg;
+      EXPECT_NE(msg.find("store=m.ebp"), std::string::npos) << msg;
+    }
+  };
+  expect_refused_naming("ebp_octree:store=m.ebp,leaf_factor=8", "leaf_factor=8");
   EXPECT_THROW(r.resolve("ebp_octree:cache_mb=64"), InputError);  // a store's option without a store
   EXPECT_NO_THROW(r.resolve("ebp_octree:store=m.ebp,coherent=true,cache_mb=64"));
-  // the sign from the closest face needs the face sides, which a store's pages do not carry
-  try {
-    r.resolve("ebp_octree:store=m.ebp,face_sign=true");
-    FAIL() << "accepted";
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("face_sign=true"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("store=m.ebp"), std::string::npos) << msg;
-  }
+  expect_refused_naming("ebp_octree:store=m.ebp,face_sign=true", "face_sign=true");
   EXPECT_NO_THROW(r.resolve("ebp_octree:store=m.ebp,face_sign=false"));
 }
 

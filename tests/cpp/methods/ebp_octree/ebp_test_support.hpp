@@ -13,6 +13,9 @@
 #include "methods/ebp_octree/build/octree_build.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
+#include "methods/ebp_octree/store/reader.hpp"
+#include "methods/ebp_octree/store/writer.hpp"
+#include "support/test_support.hpp"
 
 namespace ebp_test {
 
@@ -155,5 +158,17 @@ inline std::vector<Vec3d> clip_exact(const Vec3d& lo, const Vec3d& hi, const Vec
 }
 
 inline Octree build(const Mesh& m, BuildParams bp = {}) { return build_octree(m.vertices, m.triangles, bp); }
+
+/// The tree written to a store of 4 KiB pages and read back whole (StoreReader::load_all, which
+/// computes the derived data again).
+inline Octree through_store(const Octree& t, const std::string& name) {
+  bvhbench::test::TmpDir d("ebp_" + name);
+  StoreWriteOptions wo;
+  wo.page_target = 4096;
+  wo.info_json = "{}";
+  const std::string path = (d.p / (name + ".ebp")).string();
+  write_store_atomic(t, path, wo);
+  return StoreReader(path).load_all();
+}
 
 }  // namespace ebp_test

@@ -137,13 +137,7 @@ TEST(EbpFaceSides, OpenMeshHasNoneAndTheStoreRoundTripKeepsThem) {
   EXPECT_FALSE(open.closed);
   EXPECT_TRUE(open.front_outside.empty());
   const Octree t = build(torus(48, 24));
-  bvhbench::test::TmpDir d("ebp_face_sides_test");
-  StoreWriteOptions wo;
-  wo.page_target = 4096;
-  wo.info_json = "{}";
-  const std::string path = (d.p / "torus.ebp").string();
-  write_store_atomic(t, path, wo);
-  const Octree back = StoreReader(path).load_all();
+  const Octree back = through_store(t, "face_sides_torus");
   ASSERT_FALSE(t.front_outside.empty());
   EXPECT_EQ(back.front_outside, t.front_outside);
 }

@@ -125,13 +125,7 @@ TEST(EbpSubReferences, NoneOnAnOpenMesh) {
 TEST(EbpSubReferences, TheStoresTreeHasTheSameOnes) {
   const Mesh m = bvhbench::load_mesh(shared_mesh("cow.obj"));
   const Octree t = build(m);
-  bvhbench::test::TmpDir d("ebp_subref_test");
-  StoreWriteOptions wo;
-  wo.page_target = 4096;
-  wo.info_json = "{}";
-  const std::string path = (d.p / "cow.ebp").string();
-  write_store_atomic(t, path, wo);
-  const Octree back = StoreReader(path).load_all();
+  const Octree back = through_store(t, "subref_cow");
   ASSERT_FALSE(t.sub_refs.empty());
   ASSERT_EQ(back.sub_refs.size(), t.sub_refs.size());
   EXPECT_EQ(std::memcmp(back.sub_refs.data(), t.sub_refs.data(), t.sub_refs.size() * sizeof(SubRef)), 0);
