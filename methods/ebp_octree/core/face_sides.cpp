@@ -6,8 +6,10 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -27,6 +29,7 @@ class AtomicBits {
     for (std::size_t i = 0; i < n_; ++i) w_[i].store(0, std::memory_order_relaxed);
   }
   void set(std::uint32_t i) { w_[i >> 6].fetch_or(std::uint64_t(1) << (i & 63u), std::memory_order_relaxed); }
+  bool test(std::uint32_t i) const { return (w_[i >> 6].load(std::memory_order_relaxed) >> (i & 63u)) & 1u; }
   std::uint64_t word(std::size_t w) const { return w_[w].load(std::memory_order_relaxed); }
   std::size_t words() const { return n_; }
 
@@ -52,16 +55,6 @@ struct TriBox {
   }
 };
 
-/// Whether the closed segment [s0, s1] may meet the closed triangle (a, b, c), exactly; true
-/// also where the segment lies in the triangle's plane (not decided here). Otherwise the
-/// parity test's crossing (segment_triangle), from the endpoint off the plane.
-bool segment_meets(const Vec3d& s0, const Vec3d& s1, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  const int o0 = orient3d(a, b, c, s0), o1 = orient3d(a, b, c, s1);
-  if (o0 == o1) return o0 == 0;  // both strictly on one side, or both in the plane
-  const Cross x = o1 != 0 ? segment_triangle(s0, s1, o0, o1, a, b, c) : segment_triangle(s1, s0, o1, o0, a, b, c);
-  return x != Cross::none;
-}
-
 /// Whether a, b, c are exactly in one plane with p (the plane of a triangle and a point).
 bool coplanar(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& p) { return orient3d(a, b, c, p) == 0; }
 
@@ -75,49 +68,101 @@ Vec3d off_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return a;  // unreachable for a triangle of nonzero area
 }
 
-/// Coplanar triangles A and B (their plane's off-plane point w): whether the line of one's edge
-/// has the other's vertices strictly on the side away from its third vertex, but for a vertex
-/// the two share on that line: then they meet at most in the shared vertices (two convex
-/// polygons apart have a separating line along an edge of one of them; strictness only leaves
-/// a face out).
+/// Whether the closed segment [s0, s1], in the plane of the triangle (a, b, c), meets it, exactly:
+/// they are apart iff a line separates them strictly, and for a segment and a triangle in a plane
+/// one of the triangle's edge lines or the segment's own line does if any line does.
+bool coplanar_segment_meets(const Vec3d& s0, const Vec3d& s1, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d w = off_plane(a, b, c);
+  const Vec3d v[3] = {a, b, c};
+  for (int i = 0; i < 3; ++i) {
+    const Vec3d &p = v[i], &q = v[(i + 1) % 3], &r = v[(i + 2) % 3];
+    const int inner = orient3d(p, q, w, r);
+    if (orient3d(p, q, w, s0) == -inner && orient3d(p, q, w, s1) == -inner) return false;
+  }
+  if (s0 == s1) return true;  // a point no edge line separates lies in the triangle
+  const int oa = orient3d(s0, s1, w, a), ob = orient3d(s0, s1, w, b), oc = orient3d(s0, s1, w, c);
+  return !(oa != 0 && oa == ob && ob == oc);
+}
+
+/// Whether the closed segment [s0, s1] meets the closed triangle (a, b, c), exactly: in its plane,
+/// coplanar_segment_meets; otherwise the parity test's crossing (segment_triangle), from the
+/// endpoint off the plane.
+bool segment_meets(const Vec3d& s0, const Vec3d& s1, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const int o0 = orient3d(a, b, c, s0), o1 = orient3d(a, b, c, s1);
+  if (o0 == o1) return o0 == 0 && coplanar_segment_meets(s0, s1, a, b, c);
+  const Cross x = o1 != 0 ? segment_triangle(s0, s1, o0, o1, a, b, c) : segment_triangle(s1, s0, o1, o0, a, b, c);
+  return x != Cross::none;
+}
+
+/// Coplanar triangles A and B (their plane's off-plane point w): whether the line of an edge
+/// [P_i, P_j] of one has the other's vertices on the side away from its third vertex, those on
+/// the line (a mesh made by subdividing flat triangles has many: neighbours around a vertex whose
+/// edges continue one another) lying off the edge and only beyond a shared end. Then the two
+/// meet only on the line: the edge, and the other's part on it, the span of its vertices there,
+/// which then meets the edge only in the shared vertices. Two convex polygons apart have such a
+/// line along an edge of one of them; a case this misses only leaves a face out.
 bool coplanar_apart(const Vec3d* A, const float* const* av, const Vec3d* B, const float* const* bv, const Vec3d& w) {
   auto separates = [&](const Vec3d* P, const float* const* pv, const Vec3d* Q, const float* const* qv) {
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3, k = (i + 2) % 3;
       const int o = orient3d(P[i], P[j], w, P[k]);
       if (o == 0) continue;
-      bool all = true;
-      for (int m = 0; m < 3 && all; ++m)
-        all = same_point(qv[m], pv[i]) || same_point(qv[m], pv[j]) || orient3d(P[i], P[j], w, Q[m]) == -o;
-      if (all) return true;
+      // Positions along the edge's line by the coordinate it changes most (the points compared
+      // are on the line, so their order there is their order on it): before P_i, beyond P_j.
+      int ax = 0;
+      for (int a = 1; a < 3; ++a)
+        if (std::fabs(P[j][a] - P[i][a]) > std::fabs(P[j][ax] - P[i][ax])) ax = a;
+      const bool up = P[j][ax] > P[i][ax];
+      bool shares_i = false, shares_j = false, before = false, beyond = false, apart = true;
+      for (int m = 0; m < 3 && apart; ++m) {
+        if (same_point(qv[m], pv[i])) { shares_i = true; continue; }
+        if (same_point(qv[m], pv[j])) { shares_j = true; continue; }
+        const int om = orient3d(P[i], P[j], w, Q[m]);
+        if (om == -o) continue;
+        const double x = Q[m][ax];
+        if (om == 0 && (up ? x < P[i][ax] : x > P[i][ax])) before = true;
+        else if (om == 0 && (up ? x > P[j][ax] : x < P[j][ax])) beyond = true;
+        else apart = false;  // on A's side, or on the edge itself
+      }
+      if (apart && !(before && (beyond || shares_j)) && !(beyond && shares_i)) return true;
     }
     return false;
   };
   return separates(A, av, B, bv) || separates(B, bv, A, av);
 }
 
-/// Whether the triangles s and t meet at most in the vertices and the edge they share (exactly;
-/// false where the tests below cannot tell, which only leaves a face out):
+/// Whether the triangles s and t (sharing `sh`) meet at most in the vertices and the edge they
+/// share (exactly; false where the tests below cannot tell, which
+/// only leaves a face out):
 ///   - in one plane: coplanar_apart;
 ///   - sharing an edge uv: the planes meet in uv's line;
 ///   - sharing a vertex u: the triangles meet beyond u iff the edge of one opposite u meets the
 ///     other (their common part lies on the planes' common line through u);
 ///   - sharing none: disjoint when one's vertices are all strictly on one side of the other's
 ///     plane, or when no edge of either meets the other.
-bool meet_only_where_shared(const LeafTri& s, const LeafTri& t) {
+/// The vertices two triangles of a leaf share, by their ids (LeafVertices).
+struct Sharing {
+  int t_of_s[3] = {-1, -1, -1};  ///< for each vertex of s, the vertex of t it is, or -1
+  bool t_shared[3] = {false, false, false};
+  int count = 0;
+  Sharing(const std::uint32_t* sid, const std::uint32_t* tid) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (!t_shared[j] && sid[i] == tid[j]) {
+          t_of_s[i] = j;
+          t_shared[j] = true;
+          ++count;
+          break;
+        }
+  }
+};
+
+bool meet_only_where_shared(const LeafTri& s, const LeafTri& t, const Sharing& sh) {
   const float* sv[3] = {s.a, s.b, s.c};
   const float* tv[3] = {t.a, t.b, t.c};
-  int t_of_s[3] = {-1, -1, -1};
-  bool t_shared[3] = {false, false, false};
-  int shared = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (!t_shared[j] && same_point(sv[i], tv[j])) {
-        t_of_s[i] = j;
-        t_shared[j] = true;
-        ++shared;
-        break;
-      }
+  const int* t_of_s = sh.t_of_s;
+  const bool* t_shared = sh.t_shared;
+  const int shared = sh.count;
   if (shared == 3) return false;  // the same triangle twice
   const Vec3d S[3] = {to_d(sv[0]), to_d(sv[1]), to_d(sv[2])};
   const Vec3d T[3] = {to_d(tv[0]), to_d(tv[1]), to_d(tv[2])};
@@ -161,6 +206,50 @@ bool exact_sum(double x, double y, double* s) {
   return (x - (*s - yv)) + (y - yv) == 0;
 }
 
+/// A leaf's distinct vertices: an id per corner of each LeafTri (equal coordinates, equal id), so
+/// that shared vertices and edges are integer comparisons.
+class LeafVertices {
+ public:
+  void index(const LeafTri* blk, std::uint32_t n) {
+    std::size_t cap = 16;
+    while (cap < 6 * std::size_t(n)) cap *= 2;
+    slot_.assign(cap, kEmpty);
+    points_.clear();
+    ids_.resize(3 * std::size_t(n));
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const float* v[3] = {blk[k].a, blk[k].b, blk[k].c};
+      for (int i = 0; i < 3; ++i) ids_[3 * std::size_t(k) + std::size_t(i)] = id_of(v[i]);
+    }
+  }
+  const std::uint32_t* of(std::uint32_t k) const { return &ids_[3 * std::size_t(k)]; }
+  const float* point(std::uint32_t v) const { return points_[v]; }
+  std::uint32_t count() const { return std::uint32_t(points_.size()); }
+
+ private:
+  static constexpr std::uint32_t kEmpty = UINT32_MAX;
+  static std::uint32_t bits(float x) {
+    x += 0.0f;  // -0 and +0 are one coordinate
+    std::uint32_t b;
+    std::memcpy(&b, &x, 4);
+    return b;
+  }
+  std::uint32_t id_of(const float* p) {
+    std::uint64_t h = bits(p[0]) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ bits(p[1])) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ bits(p[2])) * 0x9E3779B97F4A7C15ull;
+    for (std::size_t i = std::size_t(h >> 32) & (slot_.size() - 1);; i = (i + 1) & (slot_.size() - 1)) {
+      if (slot_[i] == kEmpty) {
+        slot_[i] = std::uint32_t(points_.size());
+        points_.push_back(p);
+        return slot_[i];
+      }
+      if (same_point(points_[slot_[i]], p)) return slot_[i];
+    }
+  }
+  std::vector<std::uint32_t> slot_, ids_;
+  std::vector<const float*> points_;
+};
+
 /// One leaf as the face sides read it: its triangles and their boxes, its blocks' boxes, its
 /// cell, and its reference points (the leaf's, and one per octant where the tree has them).
 struct LeafView {
@@ -183,6 +272,23 @@ struct LeafView {
     for (int a = 0; a < 3; ++a) {
       const double l = scale * lo[a], h = scale * (lo[a] + size);
       if (!(x3[a] >= l && (upper_open ? x3[a] < h : x3[a] <= h))) return false;
+    }
+    return true;
+  }
+
+  /// Whether vertex v lies in the closed cell (exactly: the cell bounds are doubles).
+  bool in_closed_cell(const float* v) const {
+    for (int a = 0; a < 3; ++a)
+      if (!(double(v[a]) >= lo[a] && double(v[a]) <= lo[a] + size)) return false;
+    return true;
+  }
+  /// Whether vertex v belongs to this leaf: in its cell, half-open at the top but on the root's
+  /// upper faces, so that each vertex belongs to one leaf (the leaf whose cell holds it: a
+  /// triangle touching it touches that cell, so that leaf lists every triangle with v).
+  bool owns(const float* v) const {
+    for (int a = 0; a < 3; ++a) {
+      const double x = double(v[a]), h = lo[a] + size;
+      if (!(x >= lo[a] && (x < h || (x == h && h == t.root_lo[a] + t.root_size)))) return false;
     }
     return true;
   }
@@ -296,6 +402,134 @@ bool front_winding(const LeafView& L, std::uint32_t f, int* w_front) {
   return true;
 }
 
+/// A leaf's clean faces joined where the winding number just in front of one is that in front of
+/// the other: two clean faces (no triangle anywhere meets either but where they share) that share
+/// an edge in opposite directions, the edge an edge of no other triangle (the leaf lists every
+/// triangle that touches its closed cell, so every triangle with the edge where the edge has an
+/// endpoint in the cell). A triangle that touches the open edge without having it as an edge is
+/// not clean with either face; so only the two faces touch it, and their fronts are one wedge of
+/// space around it. A clean face's front is one region over the whole face, so the relation is
+/// transitive. Union-find over the leaf's positions.
+class FrontComponents {
+ public:
+  void join_across_edges(const LeafView& L, const LeafVertices& V, const std::vector<std::uint8_t>& clean) {
+    parent_.resize(L.n);
+    for (std::uint32_t k = 0; k < L.n; ++k) parent_[k] = k;
+    edges_.clear();
+    for (std::uint32_t k = 0; k < L.n; ++k) {
+      const std::uint32_t* v = V.of(k);
+      for (int i = 0; i < 3; ++i) edges_.push_back(Edge::of(v[i], v[(i + 1) % 3], k));
+    }
+    std::sort(edges_.begin(), edges_.end());
+    for (std::size_t i = 0; i < edges_.size();) {
+      std::size_t j = i + 1;
+      while (j < edges_.size() && edges_[j].ends == edges_[i].ends) ++j;
+      const Edge &e = edges_[i], &f = edges_[i + 1];
+      if (j - i == 2 && e.forward != f.forward && clean[e.tri] && clean[f.tri] &&
+          (L.in_closed_cell(V.point(std::uint32_t(e.ends >> 32))) || L.in_closed_cell(V.point(std::uint32_t(e.ends)))))
+        unite(e.tri, f.tri);
+      i = j;
+    }
+  }
+  std::uint32_t find(std::uint32_t k) {
+    while (parent_[k] != k) k = parent_[k] = parent_[parent_[k]];
+    return k;
+  }
+
+ private:
+  /// An edge by its endpoints' ids (the lower in the high half), and its direction in `tri`.
+  struct Edge {
+    std::uint64_t ends;
+    std::uint32_t tri;
+    bool forward;
+    static Edge of(std::uint32_t u, std::uint32_t v, std::uint32_t tri) {
+      return u < v ? Edge{std::uint64_t(u) << 32 | v, tri, true} : Edge{std::uint64_t(v) << 32 | u, tri, false};
+    }
+    bool operator<(const Edge& o) const { return ends != o.ends ? ends < o.ends : tri < o.tri; }
+  };
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<std::uint32_t> parent_;
+  std::vector<Edge> edges_;
+};
+
+/// The faces of a leaf that are not clean, as far as this leaf can tell: its pairs of triangles
+/// whose boxes meet, swept by their boxes' lower x. Every pair of triangles that meet anywhere is
+/// tested in some leaf: a pair sharing a vertex in the leaf that owns the vertex (LeafView::owns),
+/// which lists both; a pair sharing none in every leaf that lists both (a point where they meet is
+/// in a leaf's cell, which lists both).
+void mark_unclean(const LeafView& L, AtomicBits& unclean) {
+  thread_local LeafVertices V;
+  thread_local std::vector<std::pair<TriBox, std::uint32_t>> box;
+  thread_local std::vector<std::uint8_t> owned;  // by vertex id
+  V.index(L.blk, L.n);
+  owned.resize(V.count());
+  for (std::uint32_t v = 0; v < V.count(); ++v) owned[v] = L.owns(V.point(v));
+  box.clear();
+  for (std::uint32_t i = 0; i < L.n; ++i) box.push_back({TriBox(L.blk[i]), i});
+  std::sort(box.begin(), box.end(), [](const auto& x, const auto& y) { return x.first.lo[0] < y.first.lo[0]; });
+  for (std::uint32_t a = 0; a < L.n; ++a) {
+    const std::uint32_t i = box[a].second;
+    const std::uint32_t* si = V.of(i);
+    if (L.blk[i].flags() & kDegenerate) unclean.set(L.blk[i].tri());  // no plane to take a side of
+    for (std::uint32_t b = a + 1; b < L.n && box[b].first.lo[0] <= box[a].first.hi[0]; ++b) {
+      if (!box[a].first.meets(box[b].first)) continue;
+      const std::uint32_t j = box[b].second;
+      const std::uint32_t* sj = V.of(j);
+      const Sharing sh(si, sj);
+      bool here = sh.count == 0;
+      for (int x = 0; x < 3; ++x) here |= sh.t_of_s[x] >= 0 && owned[si[x]];
+      if (!here) continue;  // another leaf's pair
+      if (!meet_only_where_shared(L.blk[i], L.blk[j], sh)) {
+        unclean.set(L.blk[i].tri());
+        unclean.set(L.blk[j].tri());
+      }
+    }
+  }
+}
+
+/// The clean faces of a leaf whose front has winding number 0: measured once per component of
+/// faces with one front (FrontComponents), from its first member whose centroid can measure it
+/// (front_winding).
+void mark_outside_fronts(const LeafView& L, const AtomicBits& unclean, AtomicBits& outside_front) {
+  if (!L.lf.ref_valid) return;
+  thread_local LeafVertices V;
+  thread_local FrontComponents comps;
+  thread_local std::vector<std::uint8_t> clean;       // by position
+  thread_local std::vector<std::int8_t> comp_front;   // by root: kUnmeasured, 0 outside, 1 not
+  constexpr std::int8_t kUnmeasured = -1;
+  V.index(L.blk, L.n);
+  clean.resize(L.n);
+  for (std::uint32_t f = 0; f < L.n; ++f) clean[f] = !unclean.test(L.blk[f].tri());
+  comps.join_across_edges(L, V, clean);
+  comp_front.assign(L.n, kUnmeasured);
+  for (std::uint32_t f = 0; f < L.n; ++f) {
+    int w;
+    std::int8_t& front = comp_front[comps.find(f)];
+    if (clean[f] && front == kUnmeasured && front_winding(L, f, &w)) front = w == 0 ? 0 : 1;
+  }
+  for (std::uint32_t f = 0; f < L.n; ++f)
+    if (clean[f] && comp_front[comps.find(f)] == 0) outside_front.set(L.blk[f].tri());
+}
+
+/// body(li) for every leaf, on `threads` threads.
+template <class Body>
+void for_each_leaf(std::size_t leaves, int threads, const Body& body) {
+  if (threads <= 1) {
+    for (std::size_t li = 0; li < leaves; ++li) body(li);
+    return;
+  }
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t li = r.begin(); li != r.end(); ++li) body(li);
+    });
+  });
+}
+
 }  // namespace
 
 void compute_face_sides(Octree& t, int threads) {
@@ -305,45 +539,11 @@ void compute_face_sides(Octree& t, int threads) {
     t.front_outside.shrink_to_fit();
     return;
   }
+  // Two passes: a face's cleanliness is known once every leaf has tested its pairs.
   AtomicBits unclean(t.num_triangles), outside_front(t.num_triangles);
-  auto leaf = [&](std::size_t li) {
-    const LeafView L(t, li);
-    const LeafTri* blk = L.blk;
-    const std::uint32_t n = L.n;
-    // Every pair of triangles that meet anywhere is a pair of some leaf (a point where they meet
-    // is in a leaf's cell, which lists both), so the pairs of every leaf are all the pairs. The
-    // leaf's triangles by their boxes' lower x, so that each meets only those that follow it
-    // while their lower x is within its box.
-    thread_local std::vector<std::pair<TriBox, std::uint32_t>> box;
-    box.clear();
-    for (std::uint32_t i = 0; i < n; ++i) box.push_back({TriBox(blk[i]), i});
-    std::sort(box.begin(), box.end(), [](const auto& x, const auto& y) { return x.first.lo[0] < y.first.lo[0]; });
-    for (std::uint32_t a = 0; a < n; ++a) {
-      const LeafTri& s = blk[box[a].second];
-      if (s.flags() & kDegenerate) unclean.set(s.tri());  // no plane to take a side of
-      for (std::uint32_t b = a + 1; b < n && box[b].first.lo[0] <= box[a].first.hi[0]; ++b)
-        if (box[a].first.meets(box[b].first) && !meet_only_where_shared(s, blk[box[b].second])) {
-          unclean.set(s.tri());
-          unclean.set(blk[box[b].second].tri());
-        }
-    }
-    if (!L.lf.ref_valid) return;
-    for (std::uint32_t f = 0; f < n; ++f) {
-      int w;
-      if (!(blk[f].flags() & kDegenerate) && front_winding(L, f, &w) && w == 0) outside_front.set(blk[f].tri());
-    }
-  };
   const std::size_t nl = t.leaves.size();
-  if (threads > 1) {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nl, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t li = r.begin(); li != r.end(); ++li) leaf(li);
-      });
-    });
-  } else {
-    for (std::size_t li = 0; li < nl; ++li) leaf(li);
-  }
+  for_each_leaf(nl, threads, [&](std::size_t li) { mark_unclean(LeafView(t, li), unclean); });
+  for_each_leaf(nl, threads, [&](std::size_t li) { mark_outside_fronts(LeafView(t, li), unclean, outside_front); });
   t.front_outside.resize(unclean.words());
   std::size_t count = 0;
   for (std::size_t w = 0; w < unclean.words(); ++w) {

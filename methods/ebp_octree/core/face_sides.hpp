@@ -6,12 +6,14 @@
 /// outside (winding number 0) in front of the face and inside (1) behind it.
 ///
 /// A face qualifies when
-///   - it is clean: no other triangle meets its open interior (two triangles of a leaf meet only
-///     in the vertices and the edge they share, or not at all: exact tests), so the winding
-///     number just in front of it is one value over the whole face; and
-///   - that value is 0: counted exactly along the segment to the centroid from the reference
+///   - it is clean: no other triangle meets it but in the vertices and the edge they share (exact
+///     tests on every pair of a leaf's triangles whose boxes meet; a pair sharing a vertex only in
+///     the leaf that owns that vertex, which lists both), so the winding number just in front of
+///     it is one value over the whole face; and
+///   - that value is 0: counted exactly along the segment to a face's centroid from the reference
 ///     point of the centroid's octant of its leaf (the segment lies in the leaf's cell, so the
-///     leaf's triangles are all that can cross it).
+///     leaf's triangles are all that can cross it), once for each set of a leaf's clean faces
+///     joined by edges that only they share in opposite directions (their fronts are one region).
 /// Anything these exact tests cannot decide leaves the face out; the query then asks the inside
 /// query, as it does for every face on an open mesh.
 #include "methods/ebp_octree/core/octree.hpp"

@@ -6,7 +6,9 @@
 // path, plain, coherent, and answered from certificates.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -47,6 +49,57 @@ Vec3d beside_centroid(const Reference& ref, std::size_t i, double side, double s
   const Vec3d a = ref.v[ref.f[i][0]], b = ref.v[ref.f[i][1]], c = ref.v[ref.f[i][2]];
   const Vec3d n = bvhbench::triangle_normal(a, b, c);
   return (a + b + c) * (1.0 / 3.0) + n * (side * step);
+}
+
+/// The unit cube with every face an n x n grid of squares, each split into two triangles along
+/// alternating diagonals: a closed, outward mesh whose neighbours around a vertex lie in one plane
+/// and whose edges continue one another through vertices (as a mesh made by subdividing flat
+/// triangles has).
+Mesh grid_cube(int n) {
+  Mesh m;
+  std::map<std::array<int, 3>, std::uint32_t> index;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, added] = index.emplace(g, std::uint32_t(m.vertices.size()));
+    if (added) m.vertices.push_back({double(g[0]) / n, double(g[1]) / n, double(g[2]) / n});
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;  // (u, v, axis) is right-handed
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          auto at = [&](int di, int dj) {
+            std::array<int, 3> g{};
+            g[axis] = side * n;
+            g[u] = i + di;
+            g[v] = j + dj;
+            return vertex(g);
+          };
+          std::array<std::uint32_t, 4> q{at(0, 0), at(1, 0), at(1, 1), at(0, 1)};  // counter-clockwise seen from +axis
+          if (side == 0) std::swap(q[1], q[3]);                                    // outward: -axis
+          if ((i + j) % 2 == 0) {
+            m.triangles.push_back({q[0], q[1], q[2]});
+            m.triangles.push_back({q[0], q[2], q[3]});
+          } else {
+            m.triangles.push_back({q[0], q[1], q[3]});
+            m.triangles.push_back({q[1], q[2], q[3]});
+          }
+        }
+    }
+  return m;
+}
+
+/// Whether the winding numbers just in front of face i are 0 and just behind 1 at a grid of
+/// points over it (a face that another triangle crosses has other values on part of it).
+bool sides_hold_over_face(const Reference& ref, std::size_t i, double step) {
+  const Vec3d a = ref.v[ref.f[i][0]], b = ref.v[ref.f[i][1]], c = ref.v[ref.f[i][2]];
+  const Vec3d n = bvhbench::triangle_normal(a, b, c);
+  for (int k = 1; k < 10; ++k)
+    for (int l = 1; k + l < 10; ++l) {
+      const Vec3d x = a + (b - a) * (k / 10.0) + (c - a) * (l / 10.0);
+      if (std::fabs(ref.winding(x + n * step)) > 1e-6 || std::fabs(ref.winding(x - n * step) - 1.0) > 1e-6) return false;
+    }
+  return true;
 }
 
 }  // namespace
@@ -130,6 +183,37 @@ TEST(EbpFaceSides, CrossedInsideAndInvertedFacesAreLeftOut) {
     EXPECT_FALSE(front_outside(t, 0));
     EXPECT_FALSE(front_outside(t, 12));
   }
+}
+
+TEST(EbpFaceSides, FlatNeighboursAndTouchingLinesAreClean) {
+  // Neighbours in one plane around a vertex, edges continuing through it; along the cube's
+  // edges, a triangle of one side whose edge lies in the plane of the other side's triangle that
+  // has a vertex on that edge's line beyond it (touching the line, not the triangle). No two
+  // faces meet beyond what they share, so every face is named.
+  const Mesh m = grid_cube(6);
+  const Octree t = build(m);
+  ASSERT_TRUE(t.closed);
+  EXPECT_EQ(count_front_outside(t), m.triangles.size());
+  const Reference ref(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < m.triangles.size(); i += 7) EXPECT_TRUE(sides_hold_over_face(ref, i, 1e-7)) << "face " << i;
+}
+
+TEST(EbpFaceSides, ACrossingBeyondASharedVertexLeavesBothFacesOut) {
+  // Two tetrahedra with one vertex in common, the second turned about it so that its faces cut
+  // through the first's: the pairs of faces through the shared vertex meet beyond it.
+  Mesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.8, 0.45, -0.15}, {-0.15, 0.8, 0.45}, {0.45, -0.15, 0.8}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {0, 5, 4}, {0, 4, 6}, {0, 6, 5}, {4, 5, 6}};
+  const Octree t = build(m);
+  ASSERT_TRUE(t.closed);
+  const Reference ref(m.vertices, m.triangles);
+  std::size_t named = 0;
+  for (std::uint32_t i = 0; i < m.triangles.size(); ++i) {
+    if (!front_outside(t, i)) continue;
+    ++named;
+    EXPECT_TRUE(sides_hold_over_face(ref, i, 1e-7)) << "face " << i;
+  }
+  EXPECT_LT(named, m.triangles.size());  // the faces through the shared vertex cross
 }
 
 TEST(EbpFaceSides, OpenMeshHasNoneAndTheStoreRoundTripKeepsThem) {
