@@ -116,6 +116,8 @@ nlohmann::json stats_json(const ebp::Octree& t) {
     part("leaves", t.leaves.capacity() * sizeof(ebp::Leaf), t.leaves.size());
     part("block_boxes", t.blocks.capacity() * sizeof(ebp::BlockBox), t.blocks.size());
     part("leaf_block_index", t.leaf_block.capacity() * sizeof(std::uint32_t), t.leaf_block.size());
+    part("group_boxes", t.groups.capacity() * sizeof(ebp::BlockBox) + t.leaf_group.capacity() * sizeof(std::uint32_t),
+         t.groups.size());
     part("node_boxes", t.node_box.capacity() * sizeof(ebp::BlockBox), t.node_box.size());
     part("sub_references", t.sub_refs.capacity() * sizeof(ebp::SubRef), t.sub_refs.size());
     part("sub_reference_sides", t.sub_sides.capacity(), t.sub_sides.size());

@@ -37,8 +37,11 @@ void split(Cent* c, std::uint32_t n) {
   });
   if (n <= kBlockTris) return;  // one block, itself in order along its widest axis
   // Split point: half, rounded up to a multiple of kBlockTris (so every block but the last of
-  // the leaf is full and stays within one side).
-  std::uint32_t m = (n / 2 + kBlockTris - 1) / kBlockTris * kBlockTris;
+  // the leaf is full and stays within one side), and of a group's triangles while the part holds
+  // more than a group (so that each group of kGroupBlocks consecutive blocks is compact too).
+  const std::uint32_t unit = n > kGroupBlocks * kBlockTris ? kGroupBlocks * kBlockTris : kBlockTris;
+  std::uint32_t m = (n / 2 + unit - 1) / unit * unit;
+  if (m >= n) m = (n / 2 + kBlockTris - 1) / kBlockTris * kBlockTris;
   if (m >= n) m = n - (n % kBlockTris ? n % kBlockTris : kBlockTris);
   split(c, m);
   split(c + m, n - m);
@@ -107,6 +110,20 @@ void compute_leaf_blocks(Octree& T) {
       }
     }
   }
+  // Group boxes: the union of their blocks' boxes, for leaves of more than kGroupBlocks blocks.
+  T.leaf_group.assign(T.leaves.size(), 0);
+  std::size_t ng = 0;
+  for (std::size_t li = 0; li < T.leaves.size(); ++li) {
+    const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
+    T.leaf_group[li] = std::uint32_t(ng);
+    if (nb > kGroupBlocks) ng += (nb + kGroupBlocks - 1) / kGroupBlocks;
+  }
+  T.groups.assign(ng, empty_box());
+  for (std::size_t li = 0; li < T.leaves.size(); ++li) {
+    const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
+    if (nb <= kGroupBlocks) continue;
+    for (std::uint32_t j = 0; j < nb; ++j) grow(T.groups[T.leaf_group[li] + j / kGroupBlocks], T.blocks[T.leaf_block[li] + j]);
+  }
   // Node boxes, children before parents (children have larger indices in every Octree we make:
   // pre-order in build and load_all, checked by the page decoder). Leaves: the union of their
   // blocks clipped to the cell (the geometry a leaf stands for is its triangles within its cell;
@@ -141,7 +158,8 @@ void compute_leaf_blocks(Octree& T) {
 }
 
 bool has_leaf_blocks(const Octree& T) {
-  return T.leaf_block.size() == T.leaves.size() && T.node_box.size() == T.nodes.size();
+  return T.leaf_block.size() == T.leaves.size() && T.leaf_group.size() == T.leaves.size() &&
+         T.node_box.size() == T.nodes.size();
 }
 
 }  // namespace ebp

@@ -114,6 +114,9 @@ struct BlockBox {
 };
 static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
 inline constexpr std::uint32_t kBlockTris = 8;
+/// Blocks per group: a leaf of more than kGroupBlocks blocks has a box per group of kGroupBlocks
+/// consecutive blocks (the layer above its blocks, leaf_blocks.hpp).
+inline constexpr std::uint32_t kGroupBlocks = 8;
 
 /// A derived reference point of a leaf's octant (sub_references.hpp): strictly inside the
 /// octant, off every face plane of the leaf, with its exact winding number.
@@ -149,6 +152,8 @@ class Octree {
   std::vector<BlockBox> blocks;           ///< box of each group of kBlockTris LeafTris of a leaf
   std::vector<std::uint32_t> leaf_block;  ///< per leaf: its first block (ceil(tri_count / 8) blocks)
   std::vector<BlockBox> node_box;         ///< per node: box of its triangles within its cell
+  std::vector<BlockBox> groups;           ///< box of each group of kGroupBlocks blocks of a leaf of more blocks
+  std::vector<std::uint32_t> leaf_group;  ///< per leaf: its first group (none for a leaf of kGroupBlocks blocks or fewer)
   // --- derived (sub_references.cpp), on closed meshes only: empty otherwise ---
   std::vector<SubRef> sub_refs;           ///< per leaf, 8 in octant order
   std::vector<std::uint8_t> sub_sides;    ///< per block, 8 masks in octant order: bit j = LeafTri j of the block has sub-reference o on its outer side
@@ -156,6 +161,7 @@ class Octree {
   std::vector<std::uint64_t> front_outside;  ///< bit per input triangle: its front is outside, its back inside
   std::size_t derived_bytes() const {
     return blocks.capacity() * sizeof(BlockBox) + leaf_block.capacity() * 4 + node_box.capacity() * sizeof(BlockBox) +
+           groups.capacity() * sizeof(BlockBox) + leaf_group.capacity() * 4 +
            sub_refs.capacity() * sizeof(SubRef) + sub_sides.capacity() + front_outside.capacity() * 8;
   }
   /// The exact corner of a leaf's cell (its float centre is within rounding of the cell's).

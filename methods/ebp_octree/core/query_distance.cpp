@@ -496,6 +496,19 @@ class Query::DistanceSearch {
   /// ascending (bound, block): a deterministic order. Returns how many. `pre_d2`, if given, holds
   /// every block's squared box distance already (the located start's first pass), and block
   /// `skip` is left out (scanned already).
+  /// The groups of leaf li whose boxes meet the box [lo, hi], a bit each (up to 32 groups; the
+  /// rest are taken as live).
+  unsigned group_pass(std::uint32_t li, std::uint32_t ng, const float lo[3], const float hi[3]) {
+    const BlockBox* gb = t_.groups.data() + t_.leaf_group[li];
+    const LeafKernelTable& kt = leaf_kernel_table();
+    unsigned live = 0;
+    for (std::uint32_t g0 = 0; g0 < ng && g0 < 32; g0 += 8)
+      live |= kt.block_pass(gb + g0, std::min<std::uint32_t>(8, ng - g0), lo, hi) << g0;
+    if (ng > 32) live = ~0u;
+    counters.planes_tested += ng;
+    return live;
+  }
+
   std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn, const double* pre_d2 = nullptr,
                              std::uint32_t skip = UINT32_MAX) {
     const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
@@ -541,8 +554,10 @@ class Query::DistanceSearch {
     // the few blocks near p only.
     const bool cull = lim2 < std::numeric_limits<double>::infinity();
     float ball_lo[3], ball_hi[3];
+    bool small_ball = false;  // under the leaf cell: a group can be apart from it (far balls meet all)
     if (cull) {
       const double r = B.best + tol;
+      small_ball = r < t_.root_size / double(std::uint64_t(1) << t_.leaf_level);
       float unused;
       for (int a = 0; a < 3; ++a) {
         float_bounds(p[a] - r, &ball_lo[a], &unused);
@@ -550,7 +565,13 @@ class Query::DistanceSearch {
       }
     }
     const LeafKernelTable& kt = leaf_kernel_table();
+    // A leaf of more than a group's blocks: its groups' boxes first, against the same box.
+    static_assert(kGroupBlocks == 8, "a group's blocks are one pass of the block kernel");
+    const std::uint32_t ng = (nb + kGroupBlocks - 1) / kGroupBlocks;
+    const unsigned live_groups = small_ball && ng > 1 ? group_pass(li, ng, ball_lo, ball_hi) : ~0u;
     for (std::uint32_t j0 = 0; j0 < nb; j0 += 8) {
+      const std::uint32_t g = j0 / kGroupBlocks;
+      if (g < 32 && !((live_groups >> g) & 1u)) continue;
       const unsigned w = std::min<std::uint32_t>(8, nb - j0);
       for (unsigned live = cull ? kt.block_pass(bb + j0, w, ball_lo, ball_hi) : (1u << w) - 1; live;
            live &= live - 1) {

@@ -19,7 +19,8 @@
 
 using namespace ebp_test;
 
-// Leaf blocks (leaf_blocks.hpp): each block box holds its triangles, each node box holds its
+// Leaf blocks (leaf_blocks.hpp): each block box holds its triangles, each group box its blocks,
+// each node box holds its
 // leaves' triangles within their cells, a leaf block is ordered by its set alone (the same
 // triangles, and any permutation of them orders to the same block).
 TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
@@ -32,7 +33,7 @@ TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
     return true;
   };
   std::mt19937_64 rng(3);
-  std::size_t ordered = 0;
+  std::size_t ordered = 0, grouped = 0;
   for (std::size_t li = 0; li < t.leaves.size(); ++li) {
     const Leaf& lf = t.leaves[li];
     ASSERT_EQ(t.leaf_block[li] + (lf.tri_count + kBlockTris - 1) / kBlockTris,
@@ -48,8 +49,21 @@ TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
     order_leaf_triangles(sh.data(), std::uint32_t(sh.size()));
     ASSERT_EQ(0, std::memcmp(sh.data(), blk.data(), blk.size() * sizeof(LeafTri))) << "leaf " << li;
     ordered += lf.tri_count > kBlockTris;
+    // Groups: a leaf of more than kGroupBlocks blocks has one box per kGroupBlocks blocks, each
+    // holding its blocks' boxes (the search skips a group whose box is apart from its ball).
+    const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+    if (nb <= kGroupBlocks) continue;
+    ++grouped;
+    const std::uint32_t ng = (nb + kGroupBlocks - 1) / kGroupBlocks;
+    ASSERT_LE(t.leaf_group[li] + ng, t.groups.size()) << li;
+    for (std::uint32_t j = 0; j < nb; ++j) {
+      const BlockBox& g = t.groups[t.leaf_group[li] + j / kGroupBlocks];
+      const BlockBox& b = t.blocks[t.leaf_block[li] + j];
+      ASSERT_TRUE(inside(g, b.lo) && inside(g, b.hi)) << li << " " << j;
+    }
   }
   EXPECT_GT(ordered, 10u);
+  EXPECT_GT(grouped, 0u);
   // Node boxes: a leaf's holds every point of its triangles within its cell (checked on the
   // triangles' vertices inside the cell and on their boxes clipped to the cell); a parent's
   // holds its children's.
