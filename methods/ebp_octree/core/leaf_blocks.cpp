@@ -90,7 +90,7 @@ void order_leaf_triangles(LeafTri* block, std::uint32_t n) {
   for (std::uint32_t k = 0; k < n; ++k) block[k] = tmp[c[k].k];
 }
 
-void compute_leaf_blocks(Octree& T) {
+void compute_leaf_blocks(Octree& T, bool with_groups) {
   T.leaf_block.assign(T.leaves.size(), 0);
   std::size_t nb = 0;
   for (std::size_t li = 0; li < T.leaves.size(); ++li) {
@@ -111,15 +111,15 @@ void compute_leaf_blocks(Octree& T) {
     }
   }
   // Group boxes: the union of their blocks' boxes, for leaves of more than kGroupBlocks blocks.
-  T.leaf_group.assign(T.leaves.size(), 0);
+  T.leaf_group.assign(with_groups ? T.leaves.size() : 0, 0);
   std::size_t ng = 0;
-  for (std::size_t li = 0; li < T.leaves.size(); ++li) {
+  for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {
     const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
     T.leaf_group[li] = std::uint32_t(ng);
     if (nb > kGroupBlocks) ng += (nb + kGroupBlocks - 1) / kGroupBlocks;
   }
   T.groups.assign(ng, empty_box());
-  for (std::size_t li = 0; li < T.leaves.size(); ++li) {
+  for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {
     const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
     if (nb <= kGroupBlocks) continue;
     for (std::uint32_t j = 0; j < nb; ++j) grow(T.groups[T.leaf_group[li] + j / kGroupBlocks], T.blocks[T.leaf_block[li] + j]);
@@ -158,7 +158,7 @@ void compute_leaf_blocks(Octree& T) {
 }
 
 bool has_leaf_blocks(const Octree& T) {
-  return T.leaf_block.size() == T.leaves.size() && T.leaf_group.size() == T.leaves.size() &&
+  return T.leaf_block.size() == T.leaves.size() && (T.leaf_group.empty() || T.leaf_group.size() == T.leaves.size()) &&
          T.node_box.size() == T.nodes.size();
 }
 

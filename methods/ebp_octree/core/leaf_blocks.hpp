@@ -20,9 +20,11 @@ namespace ebp {
 void order_leaf_triangles(LeafTri* block, std::uint32_t n);
 
 /// Recomputes tree.blocks, tree.leaf_block, tree.groups, tree.leaf_group and tree.node_box from
-/// tree.nodes/leaves/tris.
+/// tree.nodes/leaves/tris; `groups` false leaves tree.groups and tree.leaf_group empty (a store's
+/// page: its bytes are what the page cache holds, and the groups save too little to take room
+/// from other pages; the queries then test every block).
 /// Call at the end of every construction of an Octree (build, page decode, load_all).
-void compute_leaf_blocks(Octree& tree);
+void compute_leaf_blocks(Octree& tree, bool groups = true);
 
 /// True if tree's derived boxes are present and sized for its nodes/leaves (Query requires it).
 bool has_leaf_blocks(const Octree& tree);

@@ -103,9 +103,9 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
         const BlockBox* block_boxes = t.blocks.data() + t.leaf_block[nd.index];
         const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
         static_assert(kGroupBlocks == 8, "a group's blocks are one pass of the block kernel");
-        const BlockBox* group_boxes = t.groups.data() + t.leaf_group[nd.index];
+        const BlockBox* group_boxes = t.leaf_group.empty() ? nullptr : t.groups.data() + t.leaf_group[nd.index];
         for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {
-          if (nb > kGroupBlocks) {  // the group's box first
+          if (group_boxes && nb > kGroupBlocks) {  // the group's box first
             const BlockBox& g = group_boxes[b0 / kGroupBlocks];
             if (g.hi[0] < lo[0] || g.lo[0] > hi[0] || g.hi[1] < lo[1] || g.lo[1] > hi[1] || g.hi[2] < lo[2] || g.lo[2] > hi[2])
               continue;

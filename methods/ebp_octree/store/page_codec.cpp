@@ -234,7 +234,7 @@ std::unique_ptr<Page> decode_page(const std::uint8_t* data, std::size_t size, co
   T.leaf_level = L;
   T.num_triangles = ph.nlocal;
   T.closed = c.closed;
-  compute_leaf_blocks(T);  // derived boxes (not in the file)
+  compute_leaf_blocks(T, false);  // derived boxes (not in the file), without groups
   // No sub-references (sub_references.hpp): a page is decoded while a query waits for it, and
   // they would add ~9 us a leaf to every page load; the inside answers are the same without.
   page->chain = chain;
