@@ -33,6 +33,7 @@
 #include "methods/ebp_octree/build/build_parts.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/leaf_blocks.hpp"
+#include "methods/ebp_octree/core/parallel_for.hpp"
 #include "methods/ebp_octree/core/face_sides.hpp"
 #include "methods/ebp_octree/core/sub_references.hpp"
 #include "methods/ebp_octree/core/octree.hpp"
@@ -46,21 +47,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-/// Runs f(i) for i in [0, n), in parallel when threads > 1.
-template <class F>
-void par_for(int threads, std::size_t n, F&& f) {
-  if (threads <= 1 || n < 64) {
-    for (std::size_t i = 0; i < n; ++i) f(i);
-    return;
-  }
-  tbb::task_arena arena(threads);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
-    });
-  });
-}
 
 struct Pair {
   std::uint64_t m;  // leaf Morton code

@@ -1,10 +1,6 @@
 // The faces whose front is outside and back inside (face_sides.hpp).
 #include "methods/ebp_octree/core/face_sides.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -16,6 +12,7 @@
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/leaf_kernels.hpp"
+#include "methods/ebp_octree/core/parallel_for.hpp"
 #include "methods/ebp_octree/core/predicates.hpp"
 
 namespace ebp {
@@ -515,21 +512,6 @@ void mark_outside_fronts(const LeafView& L, const AtomicBits& unclean, AtomicBit
     if (clean[f] && comp_front[comps.find(f)] == 0) outside_front.set(L.blk[f].tri());
 }
 
-/// body(li) for every leaf, on `threads` threads.
-template <class Body>
-void for_each_leaf(std::size_t leaves, int threads, const Body& body) {
-  if (threads <= 1) {
-    for (std::size_t li = 0; li < leaves; ++li) body(li);
-    return;
-  }
-  tbb::task_arena arena(threads);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t li = r.begin(); li != r.end(); ++li) body(li);
-    });
-  });
-}
-
 }  // namespace
 
 void compute_face_sides(Octree& t, int threads) {
@@ -542,8 +524,8 @@ void compute_face_sides(Octree& t, int threads) {
   // Two passes: a face's cleanliness is known once every leaf has tested its pairs.
   AtomicBits unclean(t.num_triangles), outside_front(t.num_triangles);
   const std::size_t nl = t.leaves.size();
-  for_each_leaf(nl, threads, [&](std::size_t li) { mark_unclean(LeafView(t, li), unclean); });
-  for_each_leaf(nl, threads, [&](std::size_t li) { mark_outside_fronts(LeafView(t, li), unclean, outside_front); });
+  par_for(threads, nl, [&](std::size_t li) { mark_unclean(LeafView(t, li), unclean); }, 64);
+  par_for(threads, nl, [&](std::size_t li) { mark_outside_fronts(LeafView(t, li), unclean, outside_front); }, 64);
   t.front_outside.resize(unclean.words());
   std::size_t count = 0;
   for (std::size_t w = 0; w < unclean.words(); ++w) {
