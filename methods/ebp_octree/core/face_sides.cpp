@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "harness/core/weld_table.hpp"
 #include "methods/ebp_octree/core/float_coords.hpp"
 #include "methods/ebp_octree/core/float_round.hpp"
 #include "methods/ebp_octree/core/leaf_kernels.hpp"
@@ -203,48 +204,26 @@ bool exact_sum(double x, double y, double* s) {
   return (x - (*s - yv)) + (y - yv) == 0;
 }
 
-/// A leaf's distinct vertices: an id per corner of each LeafTri (equal coordinates, equal id), so
-/// that shared vertices and edges are integer comparisons.
+/// A leaf's distinct vertices (bvhbench::WeldTable): an id per corner of each LeafTri (equal
+/// coordinates, equal id), so that shared vertices and edges are integer comparisons.
 class LeafVertices {
  public:
   void index(const LeafTri* blk, std::uint32_t n) {
-    std::size_t cap = 16;
-    while (cap < 6 * std::size_t(n)) cap *= 2;
-    slot_.assign(cap, kEmpty);
-    points_.clear();
+    weld_.reset(3 * std::uint64_t(n));
     ids_.resize(3 * std::size_t(n));
+    bool added;
     for (std::uint32_t k = 0; k < n; ++k) {
       const float* v[3] = {blk[k].a, blk[k].b, blk[k].c};
-      for (int i = 0; i < 3; ++i) ids_[3 * std::size_t(k) + std::size_t(i)] = id_of(v[i]);
+      for (int i = 0; i < 3; ++i) ids_[3 * std::size_t(k) + std::size_t(i)] = weld_.insert(v[i], added);
     }
   }
   const std::uint32_t* of(std::uint32_t k) const { return &ids_[3 * std::size_t(k)]; }
-  const float* point(std::uint32_t v) const { return points_[v]; }
-  std::uint32_t count() const { return std::uint32_t(points_.size()); }
+  const float* point(std::uint32_t v) const { return weld_.point(v); }
+  std::uint32_t count() const { return std::uint32_t(weld_.size()); }
 
  private:
-  static constexpr std::uint32_t kEmpty = UINT32_MAX;
-  static std::uint32_t bits(float x) {
-    x += 0.0f;  // -0 and +0 are one coordinate
-    std::uint32_t b;
-    std::memcpy(&b, &x, 4);
-    return b;
-  }
-  std::uint32_t id_of(const float* p) {
-    std::uint64_t h = bits(p[0]) * 0x9E3779B97F4A7C15ull;
-    h = (h ^ bits(p[1])) * 0x9E3779B97F4A7C15ull;
-    h = (h ^ bits(p[2])) * 0x9E3779B97F4A7C15ull;
-    for (std::size_t i = std::size_t(h >> 32) & (slot_.size() - 1);; i = (i + 1) & (slot_.size() - 1)) {
-      if (slot_[i] == kEmpty) {
-        slot_[i] = std::uint32_t(points_.size());
-        points_.push_back(p);
-        return slot_[i];
-      }
-      if (same_point(points_[slot_[i]], p)) return slot_[i];
-    }
-  }
-  std::vector<std::uint32_t> slot_, ids_;
-  std::vector<const float*> points_;
+  bvhbench::WeldTable weld_;
+  std::vector<std::uint32_t> ids_;
 };
 
 /// One leaf as the face sides read it: its triangles and their boxes, its blocks' boxes, its
