@@ -492,23 +492,23 @@ class Query::DistanceSearch {
     limits_eps_ = eps_p;
   }
 
-  /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
-  /// ascending (bound, block): a deterministic order. Returns how many. `pre_d2`, if given, holds
-  /// every block's squared box distance already (the located start's first pass), and block
-  /// `skip` is left out (scanned already).
-  /// The groups of leaf li whose boxes meet the box [lo, hi], a bit each (up to 32 groups; the
-  /// rest are taken as live).
+  /// The groups of leaf li whose boxes meet the box [lo, hi], a bit each (a leaf of more than 32
+  /// groups has them all taken as live).
   unsigned group_pass(std::uint32_t li, std::uint32_t ng, const float lo[3], const float hi[3]) {
+    if (ng > 32) return ~0u;
     const BlockBox* gb = t_.groups.data() + t_.leaf_group[li];
     const LeafKernelTable& kt = leaf_kernel_table();
     unsigned live = 0;
-    for (std::uint32_t g0 = 0; g0 < ng && g0 < 32; g0 += 8)
+    for (std::uint32_t g0 = 0; g0 < ng; g0 += 8)
       live |= kt.block_pass(gb + g0, std::min<std::uint32_t>(8, ng - g0), lo, hi) << g0;
-    if (ng > 32) live = ~0u;
     counters.planes_tested += ng;
     return live;
   }
 
+  /// The blocks of leaf `li` not pruned by their box (and the leaf's plane hint), into order_ by
+  /// ascending (bound, block): a deterministic order. Returns how many. `pre_d2`, if given, holds
+  /// every block's squared box distance already (the located start's first pass), and block
+  /// `skip` is left out (scanned already).
   std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn, const double* pre_d2 = nullptr,
                              std::uint32_t skip = UINT32_MAX) {
     const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
@@ -557,7 +557,7 @@ class Query::DistanceSearch {
     bool small_ball = false;  // under the leaf cell: a group can be apart from it (far balls meet all)
     if (cull) {
       const double r = B.best + tol;
-      small_ball = r < t_.root_size / double(std::uint64_t(1) << t_.leaf_level);
+      small_ball = r < t_.cell_size(t_.leaf_level);
       float unused;
       for (int a = 0; a < 3; ++a) {
         float_bounds(p[a] - r, &ball_lo[a], &unused);
