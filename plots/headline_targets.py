@@ -13,6 +13,13 @@ coherent distance (EBP-Octree default and plain search, Embree coherent; >= 2x) 
 ran, without coherence (>= 1x). A query set's band and speed are read from its sidecar
 (RESULTS/data/queries/NAME.json, or beside the path the result names).
 
+The same tables in instructions: given a measurement of tools/instr_gate.py (`measure --groups
+--jobs suites/headline.yml`: each job's result in RESULTS/runs and its instructions per query in
+RESULTS/instructions.json), every figure is a job's instructions per query in its timed pass and
+every ratio is Embree's instructions over the EBP-Octree's, so that a ratio reads as a speed-up in
+both tables. Deterministic where wall clock on a shared machine moves 10-15 %, but blind to cache
+misses: the two tables together say how much of a ratio is work and how much memory.
+
 Results are read through results_io (the one reader of result files); `tools/headline_table.py`
 is the command that prints these tables. Standard library only.
 """
@@ -28,9 +35,11 @@ def _stem(path):
 
 
 class Headline:
-    """The results of one run, one per (model, path, contact setting, query, method spec)."""
+    """The results of one run, one per (model, path, contact setting, query, method spec); with
+    `instructions` ({job id: instructions per query}) its figures are those counts."""
 
-    def __init__(self, rs):
+    def __init__(self, rs, instructions=None):
+        self.instructions = instructions
         self.root = Path(rs.root)
         self.jobs = rs.jobs
         self._sidecars = {}
@@ -73,9 +82,26 @@ class Headline:
     def key(self, j):
         return (self.model(j), j.kind, self.contact_setting(j), j.query, results_io.as_str(j.get("job.method_spec")))
 
+    def speed(self, j):
+        """Queries per second, or in instructions the reciprocal of the instructions per query
+        (higher is faster in both, and a ratio of two is the same speed-up)."""
+        if j is None or not j.ok:
+            return None
+        if self.instructions is None:
+            return j.qps
+        ipq = self.instructions.get(j.id)
+        return 1.0 / ipq if ipq else None
+
     def rate(self, model, kind, query, spec, setting=None):
-        j = self.by.get((model, kind, setting, query, spec))
-        return j.qps if j is not None and j.ok else None
+        return self.speed(self.by.get((model, kind, setting, query, spec)))
+
+    def fmt(self, q):
+        """A speed as the table shows it: a rate, or instructions per query."""
+        if q is None:
+            return "—"
+        if self.instructions is not None:
+            return f"{1.0 / q:,.0f}"
+        return fmt_rate(q)
 
 
 def fmt_rate(q):
@@ -117,9 +143,9 @@ def model_rows(h):
         eb = h.by.get((m, "random", None, "inside", "ebp_octree")) or h.by.get((m, "haptic", None, "distance", "ebp_octree:coherent=true"))
         em = h.by.get((m, "random", None, "inside", "embree")) or h.by.get((m, "haptic", None, "distance", "embree:coherent=true"))
         out.append(
-            f"| {m} ({int(tris):,}) | {fmt_rate(d_auto)} "
-            f"| {fmt_rate(q('haptic', 'distance', 'ebp_octree:coherent=true,certificate_policy=always'))} "
-            f"| {fmt_rate(q('haptic', 'distance', 'ebp_octree:coherent=true,certificate=false'))} | {fmt_rate(d_emb)} "
+            f"| {m} ({int(tris):,}) | {h.fmt(d_auto)} "
+            f"| {h.fmt(q('haptic', 'distance', 'ebp_octree:coherent=true,certificate_policy=always'))} "
+            f"| {h.fmt(q('haptic', 'distance', 'ebp_octree:coherent=true,certificate=false'))} | {h.fmt(d_emb)} "
             f"| {fmt_ratio(d_auto, d_emb, 2)} "
             f"| {fmt_ratio(q('haptic', 'distance', 'ebp_octree'), q('haptic', 'distance', 'embree'), 1)} "
             f"| {fmt_ratio(q('haptic', 'inside', 'ebp_octree'), q('haptic', 'inside', 'embree'), 1)} "
@@ -148,7 +174,7 @@ def contact_rows(h):
             if auto is None and plain is None and emb is None and nc_ebp is None:
                 continue
             best = max((x for x in (auto, plain) if x is not None), default=None)
-            out.append(f"| {m} | {st[0]} | {st[1]} | {fmt_rate(auto)} | {fmt_rate(plain)} | {fmt_rate(emb)} "
+            out.append(f"| {m} | {st[0]} | {st[1]} | {h.fmt(auto)} | {h.fmt(plain)} | {h.fmt(emb)} "
                        f"| {fmt_ratio(best, emb, 2)} | {fmt_ratio(nc_ebp, nc_emb, 1)} |")
     return out
 
@@ -168,6 +194,9 @@ def out_of_core_rows(h):
         if not j.ok:
             out.append(f"| {h.model(j)}, {where} | {path} | {j.query} | {j.status} | | | |")
             continue
+        if h.instructions is not None:  # latency and memory under valgrind say nothing
+            out.append(f"| {h.model(j)}, {where} | {path} | {j.query} | {h.fmt(h.speed(j))} | | | |")
+            continue
         lat = j.get("queries.latency_ns") or {}
         # The RSS while querying: the job also loads the mesh once, to check the store against it.
         rss = j.num("memory.query_rss_bytes")
@@ -177,10 +206,14 @@ def out_of_core_rows(h):
     return out
 
 
-def markdown(rs):
-    """Every table of the headline, Markdown, a blank line between tables."""
-    h = Headline(rs)
+def markdown(rs, instructions=None):
+    """Every table of the headline, Markdown, a blank line between tables; in instructions per
+    query with `instructions` ({job id: instructions per query})."""
+    h = Headline(rs, instructions)
     lines = model_rows(h)
+    if instructions is not None:
+        lines = ["Instructions per query (callgrind, timed pass only); each ratio is Embree's count over "
+                 "the EBP-Octree's.", ""] + lines
     for more in (contact_rows(h), out_of_core_rows(h)):
         if more:
             lines += [""] + more

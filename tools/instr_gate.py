@@ -10,7 +10,9 @@ compares them with a baseline made under the same *instruction fingerprint* (com
 library versions, the processor and ISA as valgrind presents them, which pick the kernels Embree
 runs, valgrind's version; a Python method's interpreter too):
 
-  measure   count the jobs: OUT/instructions.json (and each job's result and callgrind file)
+  measure   count the jobs: OUT/instructions.json (and each job's result and callgrind file);
+            with --groups the jobs of one build group in one process, built once (a large model's
+            jobs would otherwise each build it under valgrind)
   compare   BASE NEW: exit 1 when a job needs >= --fail (10 %) more instructions per query
   gate      measure, then compare with --base (a measured folder) or --base-ref (a commit, built
             in a scratch worktree and measured in the same run); what tools/ci_gate.sh runs
@@ -63,7 +65,8 @@ def load_jobs(path, exe):
     except (ValueError, KeyError) as e:
         raise BrokenRun(f"{' '.join(cmd)}: not a job listing ({e}): is {exe} older than `suite --list --json`?")
     return [{"id": j["id"], "mesh": str(Path(j["mesh"]["path"]).resolve()), "queries": j["queries"], "query": j["query"],
-             "method": j["method"]["spec"], "threads": j["threads"]} for j in listed]
+             "method": j["method"]["spec"], "threads": j["threads"], "build_group": j.get("build_group") or j["id"]}
+            for j in listed]
 
 
 # ---- measuring ----------------------------------------------------------------------------------
@@ -74,13 +77,40 @@ def valgrind_version():
     return subprocess.run(["valgrind", "--version"], capture_output=True, text=True).stdout.strip()
 
 
+def _callgrind_parts(path):
+    """(label, total) of every file callgrind wrote for one run: OUT and its parts OUT.1, OUT.2,
+    ... (one per job, harness/run/counted_region.hpp: end_counted_job). The label is the dump's
+    trigger ("bvhbench job K", or "Program termination"); the total its `totals:` line
+    (`summary:` in older files)."""
+    path = Path(path)
+    files = [path] + sorted(path.parent.glob(path.name + ".*"), key=lambda p: p.suffix)
+    out = []
+    for f in files:
+        if not f.suffix.lstrip(".").isdigit() and f != path:
+            continue
+        label, total = "", None
+        for line in f.read_text(errors="replace").splitlines():
+            if line.startswith("desc: Trigger:"):
+                label = line.split(":", 2)[2].strip().removeprefix("Client Request:").strip()
+            elif line.startswith("totals:") or (total is None and line.startswith("summary:")):
+                total = int(line.split()[1])
+        out.append((label, total or 0))
+    return out
+
+
 def callgrind_total(path):
-    """The instructions callgrind collected (its `totals:` line; `summary:` in older files)."""
-    total = None
-    for line in Path(path).read_text(errors="replace").splitlines():
-        if line.startswith("totals:") or (total is None and line.startswith("summary:")):
-            total = int(line.split()[1])
-    return total if total is not None else 0
+    """The instructions callgrind collected in one run, over all of its parts."""
+    return sum(total for _, total in _callgrind_parts(path))
+
+
+def callgrind_job_totals(path):
+    """{K: instructions} of a group's run: job K's part ("bvhbench job K")."""
+    out = {}
+    for label, total in _callgrind_parts(path):
+        if label.startswith("bvhbench job "):
+            k = int(label.rsplit(" ", 1)[1])
+            out[k] = out.get(k, 0) + total
+    return out
 
 
 def _queries_file(exe, job, data_dir):
@@ -104,15 +134,28 @@ def _job_env():
     return env
 
 
+def _remove_callgrind_files(cg):
+    """A run's callgrind file and its parts, so that nothing of an earlier run is counted."""
+    for f in [cg, *cg.parent.glob(cg.name + ".*")]:
+        f.unlink(missing_ok=True)
+
+
+def _job_paths(job, out_dir):
+    """(result, log) of a job under OUT."""
+    res = out_dir / "runs" / f"{job['id']}.json"
+    log = out_dir / "logs" / f"{job['id']}.log"
+    for d in (res.parent, log.parent):
+        d.mkdir(parents=True, exist_ok=True)
+    return res, log
+
+
 def measure_job(exe, job, out_dir, toggle_fallback=True):
     """Counts one job's timed pass under callgrind: a record for instructions.json."""
     out_dir = Path(out_dir)
     qfile = _queries_file(exe, job, out_dir / "data" / "queries")
     cg = out_dir / "callgrind" / f"{job['id']}.cg"
-    res = out_dir / "runs" / f"{job['id']}.json"
-    log = out_dir / "logs" / f"{job['id']}.log"
-    for d in (cg.parent, res.parent, log.parent):
-        d.mkdir(parents=True, exist_ok=True)
+    cg.parent.mkdir(parents=True, exist_ok=True)
+    res, log = _job_paths(job, out_dir)
     run = [str(exe), "run", "--mesh", job["mesh"], "--method", job["method"], "--queries", str(qfile),
            "--query", job["query"], "--repeat", "1", "--threads", str(job.get("threads", 1)), "--quiet", "--out", str(res)]
     # The timed pass switches instrumentation and collection on itself (counted_region.hpp); a
@@ -121,6 +164,7 @@ def measure_job(exe, job, out_dir, toggle_fallback=True):
     if toggle_fallback:
         modes.append(("toggle", ["--collect-atstart=no", "--toggle-collect=bvhbench::ThreadedReplay::timed_pass()"]))
     for mode, opts in modes:
+        _remove_callgrind_files(cg)
         vg = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={cg}", *opts, *run]
         with open(log, "w") as lf:
             p = subprocess.run(vg, stdout=subprocess.DEVNULL, stderr=lf, env=_job_env())
@@ -132,7 +176,51 @@ def measure_job(exe, job, out_dir, toggle_fallback=True):
     else:
         raise BrokenRun(f"{job['id']}: callgrind collected nothing: was {exe} built without valgrind/callgrind.h "
                         "(harness/run/counted_region.hpp)?")
-    r = json.loads(res.read_text())
+    return _record(job, json.loads(res.read_text()), total, mode)
+
+
+def measure_group(exe, jobs, out_dir):
+    """Counts the timed passes of jobs that share one build (the same `build_group` in the runner's
+    listing) in one process under callgrind (`bvhbench run-group`), each job's from its own part
+    file: records for instructions.json, one per job. A 32M model's structure is then built once
+    under valgrind for all of its jobs, not once a job."""
+    out_dir = Path(out_dir)
+    group = jobs[0]["build_group"]
+    cg = out_dir / "callgrind" / f"{group}.cg"
+    plan_file = out_dir / "logs" / f"{group}.plan.json"
+    plan_file.parent.mkdir(parents=True, exist_ok=True)
+    cg.parent.mkdir(parents=True, exist_ok=True)
+    planned = []
+    for j in jobs:
+        res, log = _job_paths(j, out_dir)
+        res.unlink(missing_ok=True)
+        planned.append({"mesh": j["mesh"], "method": j["method"],
+                        "queries": str(_queries_file(exe, j, out_dir / "data" / "queries")), "query": j["query"],
+                        "repeat": 1, "threads": j.get("threads", 1), "truth": "", "out": str(res), "log": str(log)})
+    plan_file.write_text(json.dumps({"build_id": group, "built": "", "jobs": planned}, indent=1) + "\n")
+    _remove_callgrind_files(cg)
+    vg = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={cg}", "--instr-atstart=no", "--collect-atstart=no",
+          str(exe), "--quiet", "run-group", "--plan", str(plan_file)]
+    group_log = out_dir / "logs" / f"{group}.valgrind.log"
+    with open(group_log, "w") as lf:
+        p = subprocess.run(vg, stdout=subprocess.DEVNULL, stderr=lf, env=_job_env())
+    totals = callgrind_job_totals(cg)
+    records = []
+    for k, j in enumerate(jobs):
+        res = Path(planned[k]["out"])
+        if p.returncode != 0 or not res.exists():
+            raise BrokenRun(f"{j['id']}: the group {group} did not run under valgrind (exit {p.returncode}); "
+                            f"see {group_log} and {planned[k]['log']}")
+        r = json.loads(res.read_text())
+        if r.get("status") == "ok" and not totals.get(k):
+            raise BrokenRun(f"{j['id']}: callgrind wrote no part for it (\"bvhbench job {k}\"): was {exe} built "
+                            "without valgrind/callgrind.h, or before end_counted_job (harness/run/counted_region.hpp)?")
+        records.append(_record(j, r, totals.get(k, 0), "group"))
+    return records
+
+
+def _record(job, r, total, mode):
+    """The record of instructions.json for a job's result `r` and the instructions it counted."""
     if r.get("status") != "ok":
         return {"id": job["id"], "status": r.get("status"), "message": r.get("message", "")}
     n = int(r["queries"]["n"]) * int(r["job"]["repetitions"])
@@ -187,7 +275,7 @@ def run_fingerprint(records, vg_version):
     return fp, key
 
 
-def measure(exe, jobs, out_dir, parallel=2, progress=True):
+def measure(exe, jobs, out_dir, parallel=2, progress=True, groups=False):
     exe = Path(exe).resolve()
     if not os.access(exe, os.X_OK):
         raise BrokenRun(f"no bvhbench binary at {exe} (build it, or pass --exe)")
@@ -196,16 +284,27 @@ def measure(exe, jobs, out_dir, parallel=2, progress=True):
     out_dir.mkdir(parents=True, exist_ok=True)
     for j in jobs:  # made once, before the parallel runs share them
         _queries_file(exe, j, out_dir / "data" / "queries")
+    # Each task a list of jobs: one job, or with `groups` the jobs of one build group (largest
+    # mesh first, so that the longest build does not start last).
+    if groups:
+        by_group = {}
+        for j in jobs:
+            by_group.setdefault(j["build_group"], []).append(j)
+        tasks = sorted(by_group.values(), key=lambda js: -Path(js[0]["mesh"]).stat().st_size)
+        run_task = lambda js: measure_group(exe, js, out_dir)  # noqa: E731
+    else:
+        tasks = [[j] for j in jobs]
+        run_task = lambda js: [measure_job(exe, js[0], out_dir)]  # noqa: E731
     records = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, parallel)) as pool:
-        futs = {pool.submit(measure_job, exe, j, out_dir): j for j in jobs}
+        futs = [pool.submit(run_task, t) for t in tasks]
         for f in concurrent.futures.as_completed(futs):
-            rec = f.result()
-            records.append(rec)
-            if progress:
-                ipq = rec.get("instructions_per_query")
-                print(f"instr_gate: {rec['id']}: " + (f"{ipq:,.0f} instructions/query" if ipq else rec.get("status", "?")),
-                      file=sys.stderr)
+            for rec in f.result():
+                records.append(rec)
+                if progress:
+                    ipq = rec.get("instructions_per_query")
+                    print(f"instr_gate: {rec['id']}: " + (f"{ipq:,.0f} instructions/query" if ipq else rec.get("status", "?")),
+                          file=sys.stderr)
     records.sort(key=lambda r: r["id"])
     fp, key = run_fingerprint(records, vg)
     slowed = sorted({json.dumps(r["TEST_SLOWDOWN"]) for r in records if "TEST_SLOWDOWN" in r})
@@ -383,7 +482,7 @@ def _jobs_arg(args):
 
 
 def cmd_measure(args):
-    doc = measure(args.exe, _jobs_arg(args), args.out, args.parallel)
+    doc = measure(args.exe, _jobs_arg(args), args.out, args.parallel, groups=args.groups)
     if args.history:
         append_history(doc, args.history)
     return 0
@@ -456,6 +555,8 @@ def main(argv=None):
 
     p = sub.add_parser("measure", help="count the jobs into OUT/instructions.json")
     common(p, "results/instr-latest")
+    p.add_argument("--groups", action="store_true",
+                   help="the jobs of one build group in one process, built once (the gate runs each job alone)")
     p.set_defaults(fn=cmd_measure)
     p = sub.add_parser("compare", help="compare two measurements")
     p.add_argument("base")

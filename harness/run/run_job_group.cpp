@@ -19,6 +19,7 @@
 #include "harness/io/query_set_io.hpp"
 #include "harness/run/accuracy.hpp"
 #include "harness/run/calibration.hpp"
+#include "harness/run/counted_region.hpp"
 #include "harness/run/dataset_manifest.hpp"
 #include "harness/run/latency_by_distance.hpp"
 #include "harness/run/machine_fingerprint.hpp"
@@ -408,6 +409,7 @@ class GroupRun {
                                 {"fingerprint", machine_fingerprint(method_->machine_facts())}};
     j.r["calibration"] = measure_calibration();
     timed_passes(protocol, spec);
+    end_counted_job(k);
     j.r["queries"] = queries_block(m, spec.deadline_ns, spec.threads, j.probes);
     j.r["memory"] = {{"structure_bytes", structure_bytes_},
                      {"peak_rss_bytes", std::max(build_peak_, peak_rss_bytes())},

@@ -1,4 +1,5 @@
 // A suite's jobs as JSON (suite.hpp: suite_jobs_json), for `bvhbench suite FILE --list --json`.
+#include "harness/run/build_groups.hpp"
 #include "harness/run/suite.hpp"
 
 namespace bvhbench {
@@ -52,6 +53,7 @@ nlohmann::json suite_jobs_json(const SuiteConfig& cfg, const std::vector<JobPlan
                     {"query", to_string(j.query)},
                     {"method", method_json(j.method)},
                     {"threads", j.threads},
+                    {"build_group", build_group_id(j)},
                     {"repeat", cfg.repeat},
                     {"rounds", cfg.rounds}});
   out["jobs"] = list;

@@ -71,3 +71,30 @@ def test_ratio_mark_agrees_with_its_figure():
     assert headline_table.fmt_ratio(1.006, 1.0) == "1.01×"
     assert headline_table.fmt_ratio(0.9999, 1.0, 1.0) == "0.99× ✘"
     assert headline_table.fmt_ratio(1.0, None) == "—"
+
+
+def test_the_same_table_in_instructions(tmp_path):
+    """With --instructions the figures are each job's instructions per query (instructions.json of
+    tools/instr_gate.py, by the result file's job id) and each ratio is Embree's count over the
+    EBP-Octree's: fewer instructions read as the higher ratio, as a higher rate does."""
+    out = tmp_path / "instr"
+    (out / "runs").mkdir(parents=True)
+    (out / "data" / "queries").mkdir(parents=True)
+    sidecar(out, "cow", "contact-n20000-s1-aaaa", "contact", {"band_mm": 0.2, "slide_speed": 0.3})
+    counts = {}
+    for spec, ipq in [("ebp_octree:coherent=true", 2000), ("ebp_octree:coherent=true,certificate=false", 1600),
+                      ("embree:coherent=true", 4000), ("ebp_octree", 5000), ("embree", 4000)]:
+        result(out, "cow", "contact", "contact-n20000-s1-aaaa", "distance", spec, qps=123.0)  # valgrind's rate: unread
+        jid = f"cow__contact-n20000-s1-aaaa__distance__{spec}".replace(":", "_").replace("=", "_").replace(",", "_")
+        counts[jid] = ipq
+    (out / "instructions.json").write_text(json.dumps(
+        {"jobs": [{"id": k, "status": "ok", "instructions_per_query": v} for k, v in counts.items()]}))
+    p = subprocess.run([sys.executable, str(ROOT / "tools" / "headline_table.py"), "--instructions", str(out)],
+                       capture_output=True, text=True, check=True)
+    assert p.stdout.startswith("Instructions per query"), p.stdout
+    (row,) = [line for line in p.stdout.splitlines() if line.startswith("| cow |")]
+    # best EBP (1,600) against Embree coherent (4,000): 2.5x; not coherent 4,000 / 5,000 = 0.8x
+    assert row == "| cow | 0.2 | 0.3 | 2,000 | 1,600 | 4,000 | 2.50× ✔ | 0.80× ✘ |", row
+    bad = subprocess.run([sys.executable, str(ROOT / "tools" / "headline_table.py"), "--instructions", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "headline_table:" in bad.stderr
