@@ -41,7 +41,7 @@ void split(Cent* c, std::uint32_t n) {
   // more than a group (so that each group of kGroupBlocks consecutive blocks is compact too).
   const std::uint32_t unit = n > kGroupBlocks * kBlockTris ? kGroupBlocks * kBlockTris : kBlockTris;
   std::uint32_t m = (n / 2 + unit - 1) / unit * unit;
-  if (m >= n) m = (n / 2 + kBlockTris - 1) / kBlockTris * kBlockTris;
+  if (m >= n) m = block_count(n / 2) * kBlockTris;
   if (m >= n) m = n - (n % kBlockTris ? n % kBlockTris : kBlockTris);
   split(c, m);
   split(c + m, n - m);
@@ -96,7 +96,7 @@ void compute_leaf_blocks(Octree& T, bool with_groups) {
   for (std::size_t li = 0; li < T.leaves.size(); ++li) {
     if (nb > 0xffffffffull) throw std::length_error("too many leaf blocks");
     T.leaf_block[li] = std::uint32_t(nb);
-    nb += (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
+    nb += block_count(T.leaves[li].tri_count);
   }
   T.blocks.assign(nb, empty_box());
   for (std::size_t li = 0; li < T.leaves.size(); ++li) {
@@ -114,13 +114,13 @@ void compute_leaf_blocks(Octree& T, bool with_groups) {
   T.leaf_group.assign(with_groups ? T.leaves.size() : 0, 0);
   std::size_t ng = 0;
   for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {
-    const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
+    const std::uint32_t nb = block_count(T.leaves[li].tri_count);
     T.leaf_group[li] = std::uint32_t(ng);
     if (nb > kGroupBlocks) ng += (nb + kGroupBlocks - 1) / kGroupBlocks;
   }
   T.groups.assign(ng, empty_box());
   for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {
-    const std::uint32_t nb = (T.leaves[li].tri_count + kBlockTris - 1) / kBlockTris;
+    const std::uint32_t nb = block_count(T.leaves[li].tri_count);
     if (nb <= kGroupBlocks) continue;
     for (std::uint32_t j = 0; j < nb; ++j) grow(T.groups[T.leaf_group[li] + j / kGroupBlocks], T.blocks[T.leaf_block[li] + j]);
   }
@@ -135,7 +135,7 @@ void compute_leaf_blocks(Octree& T, bool with_groups) {
     BlockBox& b = T.node_box[i];
     if (nd.kind == NodeKind::leaf) {
       const Leaf& lf = T.leaves[nd.index];
-      const std::uint32_t n = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+      const std::uint32_t n = block_count(lf.tri_count);
       for (std::uint32_t j = 0; j < n; ++j) grow(b, T.blocks[T.leaf_block[nd.index] + j]);
       Vec3d lo, hi;
       T.cell_box(nd.code, &lo, &hi);

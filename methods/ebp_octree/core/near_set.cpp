@@ -101,7 +101,7 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
         }
         const Leaf& lf = t.leaves[nd.index];
         const BlockBox* block_boxes = t.blocks.data() + t.leaf_block[nd.index];
-        const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+        const std::uint32_t nb = block_count(lf.tri_count);
         static_assert(kGroupBlocks == 8, "a group's blocks are one pass of the block kernel");
         const BlockBox* group_boxes = t.leaf_group.empty() ? nullptr : t.groups.data() + t.leaf_group[nd.index];
         for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {

@@ -114,6 +114,8 @@ struct BlockBox {
 };
 static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
 inline constexpr std::uint32_t kBlockTris = 8;
+/// The blocks of `tri_count` consecutive LeafTris (the last one partial).
+constexpr std::uint32_t block_count(std::uint32_t tri_count) { return (tri_count + kBlockTris - 1) / kBlockTris; }
 /// Blocks per group: a leaf of more than kGroupBlocks blocks has a box per group of kGroupBlocks
 /// consecutive blocks (the layer above its blocks, leaf_blocks.hpp).
 inline constexpr std::uint32_t kGroupBlocks = 8;

@@ -19,7 +19,7 @@ Query::Query(const Octree& tree, bool coherent)
       path_(std::make_unique<CertifiedPath>()) {
   if (!has_leaf_blocks(t_)) throw std::logic_error("ebp::Query: the Octree lacks its leaf blocks (compute_leaf_blocks)");
   std::uint32_t mb = 0;
-  for (const Leaf& lf : t_.leaves) mb = std::max(mb, (lf.tri_count + kBlockTris - 1) / kBlockTris);
+  for (const Leaf& lf : t_.leaves) mb = std::max(mb, block_count(lf.tri_count));
   order_.resize(mb);
   block_d2_.resize(mb);
 }

@@ -405,7 +405,7 @@ class Query::DistanceSearch {
     std::uint32_t first = UINT32_MAX;
     const double* pre_d2 = nullptr;
     if (!(lim2 < std::numeric_limits<double>::infinity())) {
-      const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+      const std::uint32_t nb = block_count(lf.tri_count);
       const BlockBox* bb = blocks + t_.leaf_block[li];
       double* d2s = block_d2_.data();
       double nearest = std::numeric_limits<double>::infinity();
@@ -511,7 +511,7 @@ class Query::DistanceSearch {
   /// `skip` is left out (scanned already).
   std::uint32_t order_blocks(std::uint32_t li, const Leaf& lf, const PlaneHint& hn, const double* pre_d2 = nullptr,
                              std::uint32_t skip = UINT32_MAX) {
-    const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+    const std::uint32_t nb = block_count(lf.tri_count);
     const BlockBox* bb = blocks + t_.leaf_block[li];
     std::pair<double, std::uint32_t>* ord = order_.data();
     std::uint32_t m = 0;

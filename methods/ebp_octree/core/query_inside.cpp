@@ -182,7 +182,7 @@ bool leaf_winding_ref(const Vec3d& p, const Vec3d& q, const LeafTri* blk, std::u
     w += sq > 0 ? 1 : -1;  // a proper crossing: q outer -> p inner is entering
     return 1;
   };
-  const std::uint32_t nb = (n + kBlockTris - 1) / kBlockTris;
+  const std::uint32_t nb = block_count(n);
   for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {
     const unsigned mb = std::min(nb - b0, 8u);
     cnt.planes_tested += mb;  // the blocks' boxes

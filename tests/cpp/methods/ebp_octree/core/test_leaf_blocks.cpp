@@ -36,7 +36,7 @@ TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
   std::size_t ordered = 0, grouped = 0;
   for (std::size_t li = 0; li < t.leaves.size(); ++li) {
     const Leaf& lf = t.leaves[li];
-    ASSERT_EQ(t.leaf_block[li] + (lf.tri_count + kBlockTris - 1) / kBlockTris,
+    ASSERT_EQ(t.leaf_block[li] + block_count(lf.tri_count),
               li + 1 < t.leaves.size() ? t.leaf_block[li + 1] : std::uint32_t(t.blocks.size()));
     for (std::uint32_t k = 0; k < lf.tri_count; ++k) {
       const LeafTri& r = t.tris[lf.tri_begin + k];
@@ -51,7 +51,7 @@ TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
     ordered += lf.tri_count > kBlockTris;
     // Groups: a leaf of more than kGroupBlocks blocks has one box per kGroupBlocks blocks, each
     // holding its blocks' boxes (the search skips a group whose box is apart from its ball).
-    const std::uint32_t nb = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+    const std::uint32_t nb = block_count(lf.tri_count);
     if (nb <= kGroupBlocks) continue;
     ++grouped;
     const std::uint32_t ng = (nb + kGroupBlocks - 1) / kGroupBlocks;

@@ -219,7 +219,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           const unsigned want_seam = seam_mask_spelled_out(flagged, n, seam_lo, seam_hi);
           seam_met += (want_box[1] & want_seam) != 0 && (want_box[1] & ~want_seam) != 0;
           nonzero += want != 0;
-          const unsigned nb = std::min((lf.tri_count - k + kBlockTris - 1) / kBlockTris, 8u);
+          const unsigned nb = std::min(block_count(lf.tri_count - k), 8u);
           const BlockBox* boxes = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()] + k / kBlockTris;
           const unsigned want_blocks = block_mask_spelled_out(boxes, nb, lo, hi);
           // a segment from a vertex of the block (often through its edges: exact ties)
@@ -228,7 +228,7 @@ TEST(EbpLeafKernels, EachKernelGivesTheSpelledOutBits) {
           const LeafTri& e = blk[(j0++) % n];
           // squared distances from a double point (of the cell, or a corner of a block box: zero
           // gaps) to all the leaf's block boxes (any count: a tail of fewer than four)
-          const std::uint32_t nall = (lf.tri_count + kBlockTris - 1) / kBlockTris;
+          const std::uint32_t nall = block_count(lf.tri_count);
           const BlockBox* all = t.blocks.data() + t.leaf_block[&lf - t.leaves.data()];
           const BlockBox& corner = all[rng() % nall];
           const double pd[3] = {i < 6 ? lf.centre[0] + U(rng) * 2 * half : double(corner.lo[0]),
