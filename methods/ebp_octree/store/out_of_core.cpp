@@ -139,9 +139,14 @@ struct TopBound {
     fz = float(pr.z);
     slack = 1e-6 * (std::max({std::fabs(pr.x), std::fabs(pr.y), std::fabs(pr.z)}) + root_size);
   }
-  double operator()(const TopNode& nd, const Plane* planes, const Vec3d& lo, double size) const {
+  /// The bound, or the cell box's alone when that already exceeds `cutoff`: the node is pruned
+  /// either way, and its planes are not evaluated (`*planes_tested` counts those that are).
+  double operator()(const TopNode& nd, const Plane* planes, const Vec3d& lo, double size, double cutoff,
+                    std::uint64_t* planes_tested = nullptr) const {
     const double d2 = cell_d2(lo, size, p);
     const double b = d2 > 0 ? std::sqrt(d2) : 0.0;
+    if (b > cutoff) return b;
+    if (planes_tested) *planes_tested += nd.plane_count;
     float m = -std::numeric_limits<float>::infinity();
     const Plane* pl = planes + nd.plane_begin;
     for (std::uint32_t k = 0; k < nd.plane_count; ++k)
@@ -226,7 +231,7 @@ void OutOfCore::prefetch_pages(const Vec3d& p, double best, std::uint64_t qid) {
       const TopNode& cn = top_[ci];
       if (cn.kind != TopKind::inner && cn.kind != TopKind::page) continue;
       const Vec3d lo = child_corner(it.lo, csz, o);
-      const double b = bound(cn, top_planes_, lo, csz);
+      const double b = bound(cn, top_planes_, lo, csz, best);
       if (b > best) continue;
       kids[nk++] = {lo, b, ci, it.level + 1};
     }
@@ -280,8 +285,7 @@ void OutOfCore::search(const Vec3d& p, Best& bst) {
 
   const TopBound bound(p, root_centre_, root_size_);
   auto lower_bound = [&](const TopNode& nd, const Vec3d& lo, double size) {
-    top_counters_.planes_tested += nd.plane_count;
-    return bound(nd, top_planes_, lo, size);
+    return bound(nd, top_planes_, lo, size, bst.b.best, &top_counters_.planes_tested);
   };
 
   Vec3d start_lo = root_lo_;
