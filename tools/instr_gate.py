@@ -79,7 +79,7 @@ def valgrind_version():
 
 def _callgrind_parts(path):
     """(label, total) of every file callgrind wrote for one run: OUT and its parts OUT.1, OUT.2,
-    ... (one per job, harness/run/counted_region.hpp: end_counted_job). The label is the dump's
+    ... (one per job of a group of several, harness/run/counted_region.hpp: end_counted_job). The label is the dump's
     trigger ("bvhbench job K", or "Program termination"); the total its `totals:` line
     (`summary:` in older files)."""
     path = Path(path)
@@ -204,7 +204,8 @@ def measure_group(exe, jobs, out_dir):
     group_log = out_dir / "logs" / f"{group}.valgrind.log"
     with open(group_log, "w") as lf:
         p = subprocess.run(vg, stdout=subprocess.DEVNULL, stderr=lf, env=_job_env())
-    totals = callgrind_job_totals(cg)
+    # A group of several jobs dumps a part per job; a lone job's counts are the run's.
+    totals = callgrind_job_totals(cg) if len(jobs) > 1 else {0: callgrind_total(cg)}
     records = []
     for k, j in enumerate(jobs):
         res = Path(planned[k]["out"])
@@ -213,8 +214,9 @@ def measure_group(exe, jobs, out_dir):
                             f"see {group_log} and {planned[k]['log']}")
         r = json.loads(res.read_text())
         if r.get("status") == "ok" and not totals.get(k):
-            raise BrokenRun(f"{j['id']}: callgrind wrote no part for it (\"bvhbench job {k}\"): was {exe} built "
-                            "without valgrind/callgrind.h, or before end_counted_job (harness/run/counted_region.hpp)?")
+            raise BrokenRun(f"{j['id']}: callgrind counted nothing for it (part \"bvhbench job {k}\" of a group): was "
+                            f"{exe} built without valgrind/callgrind.h, or before end_counted_job "
+                            "(harness/run/counted_region.hpp)?")
         records.append(_record(j, r, totals.get(k, 0), "group"))
     return records
 

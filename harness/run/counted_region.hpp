@@ -13,11 +13,12 @@
 /// Collection is per thread in callgrind: the region is opened on the thread that runs stream 0
 /// (ThreadTeam runs task 0 on its caller), which is every query when threads == 1, as the gate runs.
 ///
-/// The jobs of one build group run in one process (`bvhbench run-group`); each job's timed passes
-/// are dumped on their own when the job ends (end_counted_job), so that callgrind writes one part
-/// file per job (OUT.1, OUT.2, ...) labelled "bvhbench job K", K the job's index in its group, and
-/// a measurement counts a 32M model's twenty jobs with one build under valgrind rather than twenty
-/// (tools/instr_gate.py measure --groups). A lone job writes one part too; its total is that part's.
+/// The jobs of one build group run in one process (`bvhbench run-group`); where there are several,
+/// each job's timed passes are dumped on their own when the job ends (end_counted_job), so that
+/// callgrind writes one part file per job (OUT.1, OUT.2, ...) labelled "bvhbench job K", K the
+/// job's index in its group, and a measurement counts a 32M model's twenty jobs with one build
+/// under valgrind rather than twenty (tools/instr_gate.py measure --groups). A lone job (`bvhbench
+/// run`) dumps nothing: its counts are in OUT, as every callgrind reader expects.
 #if defined(__has_include)
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>

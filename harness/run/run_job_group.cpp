@@ -409,7 +409,7 @@ class GroupRun {
                                 {"fingerprint", machine_fingerprint(method_->machine_facts())}};
     j.r["calibration"] = measure_calibration();
     timed_passes(protocol, spec);
-    end_counted_job(k);
+    if (jobs_.size() > 1) end_counted_job(k);  // a lone job's counts stay in callgrind's one file
     j.r["queries"] = queries_block(m, spec.deadline_ns, spec.threads, j.probes);
     j.r["memory"] = {{"structure_bytes", structure_bytes_},
                      {"peak_rss_bytes", std::max(build_peak_, peak_rss_bytes())},

@@ -193,6 +193,11 @@ class Query {
   double last_d_ = 0;                        // at this distance
   /// Whether the search at p seeds from last_tri_: the step from last_p_ is no jump (is_jump).
   bool seed_pays_at(const Vec3d& p) const;
+  /// The previous closest triangle (and its leaf and node) as the seed of a search at p, where
+  /// that pays (seed_pays_at); `s` untouched otherwise.
+  void seed_from_last(const Vec3d& p, DistanceStart& s) const;
+  /// The path's last answer: triangle k, found in `leaf` of `node`, closest to p at distance d.
+  void remember_closest(std::uint32_t k, std::uint32_t leaf, std::uint32_t node, const Vec3d& p, double d);
   // distance: the last narrowed start's walk (query_distance.cpp): from the subtree root `root`,
   // the node and cell corner at each level below it, so that the next search of a coherent path
   // resumes from the deepest of those cells that holds its ball instead of walking down from the

@@ -24,15 +24,26 @@ bool Query::seed_pays_at(const Vec3d& p) const {
   return last_tri_ != UINT32_MAX && !is_jump(step_length(p, last_p_), last_d_, t_.cell_size(t_.leaf_level));
 }
 
+void Query::seed_from_last(const Vec3d& p, DistanceStart& s) const {
+  if (!seed_pays_at(p)) return;
+  s.seed_tri = last_tri_;
+  s.seed_leaf = last_leaf_;
+  s.seed_node = last_leaf_node_;
+}
+
+void Query::remember_closest(std::uint32_t k, std::uint32_t leaf, std::uint32_t node, const Vec3d& p, double d) {
+  last_tri_ = k;
+  last_leaf_ = leaf;
+  last_leaf_node_ = node;
+  last_p_ = p;
+  last_d_ = d;
+}
+
 DistanceAnswer Query::searched_distance(const Vec3d& p) {
   DistanceBest b;
   DistanceStart s;
   if (coherent_) {
-    if (seed_pays_at(p)) {
-      s.seed_tri = last_tri_;
-      s.seed_leaf = last_leaf_;
-      s.seed_node = last_leaf_node_;
-    }
+    seed_from_last(p, s);
     s.near = true;
   }
   distance_bound(p, b, s);
@@ -44,13 +55,7 @@ DistanceAnswer Query::searched_distance(const Vec3d& p) {
   r.normal = bvhbench::triangle_normal(to_d(t.a), to_d(t.b), to_d(t.c));
   r.triangle = std::int64_t(t.tri());
   take_face_side(p, b.k, b.best, b.runner2, search_tol(p, t_.root_lo, t_.root_size));
-  if (coherent_) {
-    last_tri_ = b.k;
-    last_leaf_ = b.leaf;
-    last_leaf_node_ = b.node;
-    last_p_ = p;
-    last_d_ = r.distance;
-  }
+  if (coherent_) remember_closest(b.k, b.leaf, b.node, p, r.distance);
   return r;
 }
 
@@ -66,22 +71,12 @@ DistanceAnswer Query::certified_distance(const Vec3d& p) {
         DistanceBest b;
         b.collect = &cert;
         DistanceStart s;
-        if (seed_pays_at(centre)) {
-          s.seed_tri = last_tri_;
-          s.seed_leaf = last_leaf_;
-          s.seed_node = last_leaf_node_;
-        }
+        seed_from_last(centre, s);
         distance_bound(centre, b, s);
       },
       [&] { return searched_distance(p); }, &runner2);
   if (runner2 > 0 && site.k != UINT32_MAX) take_face_side(p, site.k, r.distance, runner2, path_->cert.tol());
-  if (site.k != UINT32_MAX) {
-    last_tri_ = site.k;
-    last_leaf_ = site.leaf;
-    last_leaf_node_ = site.node;
-    last_p_ = p;
-    last_d_ = r.distance;
-  }
+  if (site.k != UINT32_MAX) remember_closest(site.k, site.leaf, site.node, p, r.distance);
   return r;
 }
 

@@ -80,7 +80,7 @@ def test_slowdown_knob_fails_the_gate_and_the_same_tree_without_it_passes(bvhben
 def test_a_build_group_counts_each_job_as_it_counts_alone(bvhbench, shared_meshes, tmp_path):
     """`measure --groups` runs the jobs of one build in one process under valgrind, each job's
     count from its own callgrind part: the very same counts as each job alone, for the plain and
-    the coherent searches that share the structure, and for Embree's."""
+    the coherent searches that share the structure, for Embree's, and for a group of one."""
     if shutil.which("valgrind") is None:
         pytest.skip("valgrind not installed (make deps installs it)")
     suite = tmp_path / "groups.yml"
@@ -91,6 +91,11 @@ matrices:
       - {{kind: haptic, n: 300, seed: 1}}
     query: [distance, inside]
     methods: [ebp_octree, {{name: ebp_octree, params: {{coherent: [true]}}}}, embree]
+  - meshes: [{shared_meshes / 'cow.obj'}]
+    queries:
+      - {{kind: haptic, n: 300, seed: 1}}
+    query: [distance]
+    methods: [cgal_aabb]
 """)
     counts = {}
     for how, extra in (("alone", []), ("grouped", ["--groups"])):
@@ -98,9 +103,11 @@ matrices:
         assert p.returncode == 0, p.stderr
         doc = json.loads((tmp_path / how / "instructions.json").read_text())
         counts[how] = {j["id"]: (j["instructions"], j["counted_by"]) for j in doc["jobs"]}
-    assert len(counts["alone"]) == 6 and set(counts["alone"]) == set(counts["grouped"])
+    assert len(counts["alone"]) == 7 and set(counts["alone"]) == set(counts["grouped"])
     groups = {j["build_group"] for j in instr_gate.load_jobs(suite, bvhbench)}
-    assert len(groups) == 2  # the EBP-Octree's four jobs share one build, Embree's two another
+    # the EBP-Octree's four jobs share one build, Embree's two another; CGAL's lone job dumps no
+    # part of its own (its count is the run's)
+    assert len(groups) == 3
     for jid, (n, how) in counts["alone"].items():
         assert how == "region" and n > 0, jid
         assert counts["grouped"][jid] == (n, "group"), jid
