@@ -116,7 +116,7 @@ void compute_leaf_blocks(Octree& T, bool with_groups) {
   for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {
     const std::uint32_t nb = block_count(T.leaves[li].tri_count);
     T.leaf_group[li] = std::uint32_t(ng);
-    if (nb > kGroupBlocks) ng += (nb + kGroupBlocks - 1) / kGroupBlocks;
+    if (nb > kGroupBlocks) ng += group_count(nb);
   }
   T.groups.assign(ng, empty_box());
   for (std::size_t li = 0; li < T.leaf_group.size(); ++li) {

@@ -206,11 +206,8 @@ unsigned block_pass_baseline(const BlockBox* boxes, unsigned m, const float lo[3
     if (_mm_movemask_ps(_mm_or_ps(_mm_cmpgt_ps(L, QHI), _mm_cmplt_ps(H, QLO))) == 0) hit |= 1u << j;
   }
 #else
-  for (unsigned j = 0; j < m; ++j) {
-    const BlockBox& b = boxes[j];
-    if (!(b.hi[0] < lo[0] || b.lo[0] > hi[0] || b.hi[1] < lo[1] || b.lo[1] > hi[1] || b.hi[2] < lo[2] || b.lo[2] > hi[2]))
-      hit |= 1u << j;
-  }
+  for (unsigned j = 0; j < m; ++j)
+    if (boxes[j].meets(lo, hi)) hit |= 1u << j;
 #endif
   return hit;
 }

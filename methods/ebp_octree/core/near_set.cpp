@@ -105,11 +105,8 @@ bool NearSet::gather(const Octree& t, const Vec3d& glo, const Vec3d& ghi, std::u
         static_assert(kGroupBlocks == 8, "a group's blocks are one pass of the block kernel");
         const BlockBox* group_boxes = t.leaf_group.empty() ? nullptr : t.groups.data() + t.leaf_group[nd.index];
         for (std::uint32_t b0 = 0; b0 < nb; b0 += 8) {
-          if (group_boxes && nb > kGroupBlocks) {  // the group's box first
-            const BlockBox& g = group_boxes[b0 / kGroupBlocks];
-            if (g.hi[0] < lo[0] || g.lo[0] > hi[0] || g.hi[1] < lo[1] || g.lo[1] > hi[1] || g.hi[2] < lo[2] || g.lo[2] > hi[2])
-              continue;
-          }
+          if (group_boxes && nb > kGroupBlocks && !group_boxes[b0 / kGroupBlocks].meets(lo, hi))
+            continue;  // the group's box first
           for (unsigned bh = K.block_pass(block_boxes + b0, std::min(nb - b0, 8u), lo, hi); bh; bh &= bh - 1) {
             const std::uint32_t first_in_leaf = (b0 + unsigned(__builtin_ctz(bh))) * kBlockTris;
             const std::uint32_t first = lf.tri_begin + first_in_leaf;

@@ -107,10 +107,15 @@ struct Leaf {
 };
 static_assert(sizeof(Leaf) == 40, "Leaf is 40 bytes");
 
-/// A float axis-aligned box (derived data, leaf_blocks.hpp): of a group of kBlockTris consecutive
-/// LeafTris of a leaf, or of a node's geometry within its cell.
+/// A float axis-aligned box (derived data, leaf_blocks.hpp): of a block of kBlockTris consecutive
+/// LeafTris of a leaf, of a group of kGroupBlocks consecutive blocks, or of a node's geometry
+/// within its cell.
 struct BlockBox {
   float lo[3], hi[3];
+  /// Whether it meets the closed box [qlo, qhi].
+  bool meets(const float qlo[3], const float qhi[3]) const {
+    return !(hi[0] < qlo[0] || lo[0] > qhi[0] || hi[1] < qlo[1] || lo[1] > qhi[1] || hi[2] < qlo[2] || lo[2] > qhi[2]);
+  }
 };
 static_assert(sizeof(BlockBox) == 24, "BlockBox is 24 bytes");
 inline constexpr std::uint32_t kBlockTris = 8;
@@ -119,6 +124,8 @@ constexpr std::uint32_t block_count(std::uint32_t tri_count) { return (tri_count
 /// Blocks per group: a leaf of more than kGroupBlocks blocks has a box per group of kGroupBlocks
 /// consecutive blocks (the layer above its blocks, leaf_blocks.hpp).
 inline constexpr std::uint32_t kGroupBlocks = 8;
+/// The groups of `blocks` consecutive blocks (the last one partial).
+constexpr std::uint32_t group_count(std::uint32_t blocks) { return (blocks + kGroupBlocks - 1) / kGroupBlocks; }
 
 /// A derived reference point of a leaf's octant (sub_references.hpp): strictly inside the
 /// octant, off every face plane of the leaf, with its exact winding number.

@@ -568,7 +568,7 @@ class Query::DistanceSearch {
     const LeafKernelTable& kt = leaf_kernel_table();
     // A leaf of more than a group's blocks: its groups' boxes first, against the same box.
     static_assert(kGroupBlocks == 8, "a group's blocks are one pass of the block kernel");
-    const std::uint32_t ng = (nb + kGroupBlocks - 1) / kGroupBlocks;
+    const std::uint32_t ng = group_count(nb);
     const unsigned live_groups = small_ball && ng > 1 && !t_.leaf_group.empty() ? group_pass(li, ng, ball_lo, ball_hi) : ~0u;
     for (std::uint32_t j0 = 0; j0 < nb; j0 += 8) {
       const std::uint32_t g = j0 / kGroupBlocks;

@@ -7,9 +7,9 @@
 ///
 /// Why random, not least recently used: a haptic loop replays a path, and a path whose pages are a
 /// little more than the budget is LRU's worst case, where every page is evicted just before it is
-/// needed again (the 32M bunny's contact path at 0.3 m/s: 299k q/s with a 257 MiB cache, 119k
-/// with 256 MiB). A random victim loses about the overflow's share of hits there, and where the
-/// path fits it evicts nothing. The draws come from a fixed seed, so that for one query sequence
+/// needed again. A random victim loses about the overflow's share of hits there, and where the
+/// path fits it evicts nothing (figures: HISTORY.md, "The headline in instructions on every model,
+/// and a random victim in the page cache"). The draws come from a fixed seed, so that for one query sequence
 /// the hits, misses and evictions are the same on every run.
 #include <cstddef>
 #include <cstdint>

@@ -54,7 +54,7 @@ TEST(EbpLeafBlocks, BoxesContainTheirGeometryAndOrderIsAPermutation) {
     const std::uint32_t nb = block_count(lf.tri_count);
     if (nb <= kGroupBlocks) continue;
     ++grouped;
-    const std::uint32_t ng = (nb + kGroupBlocks - 1) / kGroupBlocks;
+    const std::uint32_t ng = group_count(nb);
     ASSERT_LE(t.leaf_group[li] + ng, t.groups.size()) << li;
     for (std::uint32_t j = 0; j < nb; ++j) {
       const BlockBox& g = t.groups[t.leaf_group[li] + j / kGroupBlocks];
