@@ -32,11 +32,15 @@ def main():
             doc = json.loads((args.results / "instructions.json").read_text())
             counts = {r["id"]: r["instructions_per_query"] for r in doc["jobs"] if r.get("status") == "ok"}
     except results_io.ReportError as e:
-        sys.exit(f"headline_table: {e}")
-    except (OSError, ValueError, KeyError) as e:
-        sys.exit(f"headline_table: {args.results / 'instructions.json'}: not an instruction measurement ({e})")
+        print(f"headline_table: {e}", file=sys.stderr)
+        return 2
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        print(f"headline_table: {args.results / 'instructions.json'}: not an instruction measurement ({e})",
+              file=sys.stderr)
+        return 2
     sys.stdout.write(headline_targets.markdown(rs, counts))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -79,9 +79,9 @@ def valgrind_version():
 
 def _callgrind_parts(path):
     """(label, total) of every file callgrind wrote for one run: OUT and its parts OUT.1, OUT.2,
-    ... (one per job of a group of several, harness/run/counted_region.hpp: end_counted_job). The label is the dump's
-    trigger ("bvhbench job K", or "Program termination"); the total its `totals:` line
-    (`summary:` in older files)."""
+    ... (one per job of a group of several, harness/run/counted_region.hpp: end_counted_job). The
+    label is the dump's trigger ("bvhbench job K", or "Program termination"); the total its
+    `totals:` line (`summary:` in older files)."""
     path = Path(path)
     files = [path] + sorted(path.parent.glob(path.name + ".*"), key=lambda p: p.suffix)
     out = []

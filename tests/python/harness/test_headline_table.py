@@ -97,4 +97,9 @@ def test_the_same_table_in_instructions(tmp_path):
     assert row == "| cow | 0.2 | 0.3 | 2,000 | 1,600 | 4,000 | 2.50× ✔ | 0.80× ✘ |", row
     bad = subprocess.run([sys.executable, str(ROOT / "tools" / "headline_table.py"), "--instructions", str(tmp_path)],
                          capture_output=True, text=True)
-    assert bad.returncode != 0 and "headline_table:" in bad.stderr
+    assert bad.returncode == 2 and "headline_table:" in bad.stderr
+    # results, but no instruction measurement beside them: named, exit 2
+    (out / "instructions.json").unlink()
+    missing = subprocess.run([sys.executable, str(ROOT / "tools" / "headline_table.py"), "--instructions", str(out)],
+                             capture_output=True, text=True)
+    assert missing.returncode == 2 and "instructions.json: not an instruction measurement" in missing.stderr
