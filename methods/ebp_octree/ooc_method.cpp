@@ -120,6 +120,7 @@ class EbpOocMethod final : public SharedStructureMethod<EbpOocQueries> {
     j["cache_budget_bytes"] = cache_bytes_;
     j["cache_budget_bytes_per_thread"] = thread_cache_bytes_;  // one page cache per query thread
     j["pinned_bytes"] = store_->pinned_bytes() + ooc.cache().bookkeeping_bytes();
+    j["cache_eviction"] = ebp::PageCache::kEviction;
     j["cold"] = cold_;
     return j;
   }

@@ -25,6 +25,8 @@ namespace ebp {
 
 class PageCache {
  public:
+  /// How a full cache chooses the page it evicts, as a result records it (ooc_method.cpp).
+  static constexpr const char* kEviction = "random resident page, fixed seed";
   struct Entry {
     std::unique_ptr<Page> page;
     std::optional<Query> query;  ///< over page->tree (which never moves)
